@@ -246,4 +246,5 @@ class Reading:
             "confidence": self.confidence,
             "scale": self.scale.to_dict(),
             "failure": None if self.failure is None else self.failure.to_dict(),
+            "reasons": list(self.reasons),
         }

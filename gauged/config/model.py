@@ -66,6 +66,16 @@ class GaugeConfig(BaseModel):
     smoothing: SmoothingConfig = Field(default_factory=SmoothingConfig)
     alarms: AlarmsConfig = Field(default_factory=AlarmsConfig)
 
+    @model_validator(mode="after")
+    def _rate_alarm_reachable(self) -> GaugeConfig:
+        plausible, alarm = self.smoothing.plausible_rate_per_s, self.alarms.max_rate_per_s
+        if plausible is not None and alarm is not None and plausible <= alarm:
+            issues = FieldIssues()
+            issues.add(("alarms", "max_rate_per_s"), f"must be below smoothing.plausible_rate_per_s ({plausible:g}): "
+                       "faster changes are rejected as implausible, so the rate alarm could never fire")
+            issues.raise_if_any()
+        return self
+
     @field_validator("roi")
     @classmethod
     def _sane_roi(cls, roi: tuple[int, int, int, int] | None) -> tuple[int, int, int, int] | None:

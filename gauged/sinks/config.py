@@ -31,6 +31,10 @@ class McapSinkConfig(BaseModel):
     rotate_s: float = Field(3600.0, gt=0, description="Start a new file after this many seconds of frame time.")
     images: Literal["none", "annotated"] = Field(
         "none", description="Also log annotated camera images on /gauged/<camera>/annotated.")
+    chunk_kb: int = Field(
+        64, ge=4, le=65536, description="Size of a zstd chunk (KiB); a crash loses at most the chunk being filled.")
+    flush_s: float = Field(
+        2.0, gt=0, description="Close the open chunk at least this often (seconds), bounding what a crash can lose.")
 
 
 class PrometheusSinkConfig(BaseModel):

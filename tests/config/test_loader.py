@@ -127,3 +127,31 @@ def test_parse_config_bad_prefix_and_listen():
     errors = _errors(text)
     assert any(e.startswith("cfg.yaml:16 outputs.zenoh.prefix: must be a plain key") for e in errors)
     assert any(e.startswith("cfg.yaml:17 outputs.prometheus.listen: must be host:port") for e in errors)
+
+
+def test_parse_config_rate_alarm_must_be_reachable():
+    text = BASE.replace("      high: 8", "      high: 8\n      max_rate_per_s: 3\n    smoothing: {plausible_rate_per_s: 2}")
+    (error,) = _errors(text)
+    assert error.startswith("cfg.yaml:15 gauges[1].alarms.max_rate_per_s: must be below smoothing.plausible_rate_per_s (2)")
+
+
+def _field_names(model: type) -> set[str]:
+    from pydantic import BaseModel
+
+    names = set()
+    for name, field in model.model_fields.items():
+        names.add(name)
+        for candidate in getattr(field.annotation, "__args__", ()) + (field.annotation,):
+            if isinstance(candidate, type) and issubclass(candidate, BaseModel):
+                names |= _field_names(candidate)
+    return names
+
+
+def test_example_config_shows_every_option():
+    from gauged.config.model import GaugedConfig
+    from gauged.sources.config import McapSourceConfig, ZenohSourceConfig
+
+    text = (REPO / "config" / "gauged.example.yaml").read_text()
+    names = _field_names(GaugedConfig) | _field_names(McapSourceConfig) | _field_names(ZenohSourceConfig)
+    missing = sorted(name for name in names if f"{name}:" not in text)
+    assert not missing, f"config/gauged.example.yaml does not show: {missing}"
