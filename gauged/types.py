@@ -135,7 +135,8 @@ class NeedleLine:
 
     @property
     def angle(self) -> float:
-        """Image angle of the tail-to-tip direction, radians in (-pi, pi]."""
+        """Raw image angle of the tail-to-tip direction, radians in (-pi, pi]. Not a dial angle: read
+        the scale with :func:`gauged.geometry.needle_line.needle_dial_angle`."""
         return math.atan2(self.direction[1], self.direction[0])
 
 
@@ -143,8 +144,8 @@ class NeedleLine:
 class ScaleMarker:
     """A number printed on the scale: OCR text, parsed value, box, and its angle on the scale ellipse.
 
-    ``angle`` is the parametric/polar angle (radians) of the number's projection onto the scale
-    ellipse, or ``None`` before projection. ``inlier`` is set by the RANSAC fit.
+    ``angle`` is the dial angle (radians, :func:`gauged.geometry.dial_frame.dial_angle`) of the
+    number's centre, or ``None`` before projection. ``inlier`` is set by the RANSAC fit.
     """
 
     text: str
@@ -159,7 +160,8 @@ class ScaleMarker:
 class ScaleModel:
     """The scale of one gauge: where it lies and how angle maps to value.
 
-    ``value = slope * unwrap(angle) + intercept``, where ``unwrap`` maps an image angle into the
+    ``value = slope * unwrap(angle) + intercept``, where ``unwrap`` maps a dial angle
+    (:func:`gauged.geometry.dial_frame.dial_angle`) into the
     interval ``[zero_angle, zero_angle + 2 pi)`` with ``zero_angle`` the wrap-around angle (the
     midpoint of the gap between the end and start notches, outside the scale).
     """
@@ -176,7 +178,7 @@ class ScaleModel:
     markers: tuple[ScaleMarker, ...] = ()
 
     def unwrap(self, angle: float) -> float:
-        """Map an image angle into ``[zero_angle, zero_angle + 2 pi)``."""
+        """Map a dial angle into ``[zero_angle, zero_angle + 2 pi)``."""
         return self.zero_angle + (angle - self.zero_angle) % (2.0 * math.pi)
 
     def value_at(self, angle: float) -> float:
