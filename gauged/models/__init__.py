@@ -1,0 +1,1 @@
+"""The trained ONNX models shipped with gauged (see README.md here)."""

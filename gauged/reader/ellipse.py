@@ -1,0 +1,148 @@
+"""The scale arc of one gauge: an ellipse through its notches, and where the scale starts and ends.
+
+Reitsma et al. (Sec. 3.3) fit an ellipse through the detected notches. Detected notches include
+false peaks (a printed logo, a screw head), so this fits robustly: fit, drop notches whose orthogonal
+distance is far beyond the others', refit. With fewer than five notches, or when the data cannot tell
+an ellipse from a circle, a circle is used (:func:`gauged.geometry.ellipse_fit.fit_ellipse` "auto").
+
+The start and end notches come from their own heatmaps; when one is missing it is inferred from the
+major notches as the two ends of the largest angular gap between them (a scale never wraps around
+its gap).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gauged.geometry.angles import scale_span, wrap_angle
+from gauged.geometry.dial_frame import dial_angle, normalized_radius
+from gauged.geometry.ellipse_distance import orthogonal_distance
+from gauged.geometry.ellipse_fit import fit_circle, fit_ellipse, fit_ellipse_direct
+from gauged.reader.keypoints import CropKeypoints
+from gauged.types import Ellipse, StageFailure
+
+STAGE = "ellipse"
+REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends", "implausible_span")
+
+MIN_SPAN = np.radians(60.0)
+MAX_SPAN = np.radians(350.0)
+
+
+@dataclass(frozen=True)
+class ScaleArc:
+    """The scale's ellipse and its ends, in the crop's pixel coordinates.
+
+    ``centre`` is the dial centre the angles are measured from: the needle pivot when the crop
+    model found one inside the ellipse (under perspective the imaged centre of the dial is not the
+    centre of the imaged ellipse), else the ellipse centre. Angles are dial angles
+    (:func:`gauged.geometry.dial_frame.dial_angle`), radians.
+    """
+
+    ellipse: Ellipse
+    centre: tuple[float, float]
+    start_angle: float
+    end_angle: float
+    zero_angle: float
+    notches: np.ndarray  # (N, 2) inlier notch points
+    rms_px: float
+    ends_inferred: bool
+
+    @property
+    def span(self) -> float:
+        return scale_span(self.start_angle, self.end_angle)
+
+
+def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[Ellipse, np.ndarray] | StageFailure:
+    """RANSAC over 5-notch ellipse hypotheses (3-notch circles when fewer), then a refit on the inliers.
+
+    False notch peaks (a screw head, a printed logo) pull a plain least-squares conic far off the
+    ring, so the consensus set is found first. The sampling generator has a fixed seed: the same
+    notches always give the same ellipse, so replays reproduce readings bit for bit.
+    """
+    count = len(points)
+    sample = 5 if count >= 6 else 3
+    if count <= sample:
+        ellipse = fit_ellipse(points, shape="auto")
+        if isinstance(ellipse, StageFailure):
+            return StageFailure(STAGE, ellipse.reason if ellipse.reason in REASONS else "degenerate_conic", ellipse.detail)
+        return ellipse, np.ones(count, bool)
+    rng = np.random.default_rng(0)
+    best_keep, best_cost = None, np.inf
+    for _ in range(trials):
+        subset = points[rng.choice(count, sample, replace=False)]
+        hypothesis = fit_ellipse_direct(subset) if sample == 5 else fit_circle(subset)
+        if isinstance(hypothesis, StageFailure) or hypothesis.b < 0.2 * hypothesis.a:
+            continue
+        # Radial distance in the dial frame: cheap, and close to the orthogonal one near the ring.
+        dist = np.abs(normalized_radius(hypothesis, points) - 1.0) * np.sqrt(hypothesis.a * hypothesis.b)
+        cost = float(np.minimum(dist, tol_px).sum())  # MSAC (Torr & Zisserman 2000)
+        if cost < best_cost:
+            best_cost, best_keep = cost, dist <= tol_px
+    if best_keep is None or best_keep.sum() < 3:
+        return StageFailure(STAGE, "degenerate_conic", "no ellipse hypothesis from the notches")
+    keep = best_keep
+    for _ in range(3):  # refit on the consensus set until it is stable
+        ellipse = fit_ellipse(points[keep], shape="auto")
+        if isinstance(ellipse, StageFailure):
+            return StageFailure(STAGE, ellipse.reason if ellipse.reason in REASONS else "degenerate_conic", ellipse.detail)
+        new_keep = np.abs(orthogonal_distance(ellipse, points)) <= tol_px
+        if new_keep.sum() < 3 or np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+    return ellipse, keep
+
+
+def _ends_from_gap(angles: np.ndarray) -> tuple[float, float]:
+    """Start and end angles around the largest clockwise gap between sorted notch angles."""
+    order = np.sort(np.mod(angles, 2 * np.pi))
+    gaps = np.diff(np.concatenate([order, order[:1] + 2 * np.pi]))
+    k = int(np.argmax(gaps))
+    end, start = order[k], order[(k + 1) % len(order)]
+    return float(start), float(end)
+
+
+def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4,
+                  max_rms_fraction: float = 0.02, min_axis_ratio: float = 0.35) -> ScaleArc | StageFailure:
+    """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
+
+    Failures: ``too_few_notches`` (fewer than ``min_notches`` notch points), ``degenerate_conic``,
+    ``poor_fit`` (inlier RMS above ``max_rms_fraction`` of the radius), ``too_oblique`` (axis ratio
+    below ``min_axis_ratio``, a dial seen more than ~70 degrees off-axis), ``no_scale_ends`` (start or
+    end notch missing and not inferable), ``implausible_span`` (scale span outside 60-350 degrees).
+    """
+    parts = [keypoints.major.points]
+    for peaks in (keypoints.start, keypoints.end):
+        if len(peaks):
+            parts.append(peaks.points[:1])
+    points = np.concatenate(parts).reshape(-1, 2)
+    if len(points) < min_notches:
+        return StageFailure(STAGE, "too_few_notches", f"{len(points)} notch points, need {min_notches}")
+    fitted = _robust_fit(points, tol_px=0.012 * crop_size)
+    if isinstance(fitted, StageFailure):
+        return fitted
+    ellipse, inliers = fitted
+    if ellipse.b / ellipse.a < min_axis_ratio:
+        return StageFailure(STAGE, "too_oblique", f"axis ratio {ellipse.b / ellipse.a:.2f} < {min_axis_ratio}")
+    if inliers.sum() < max(min_notches, 0.6 * len(points)):
+        return StageFailure(STAGE, "poor_fit", f"only {inliers.sum()} of {len(points)} notches lie on one ellipse")
+    rms = float(np.sqrt(np.mean(orthogonal_distance(ellipse, points[inliers]) ** 2)))
+    if rms > max_rms_fraction * ellipse.a:
+        return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
+    centre = ellipse.center
+    if len(keypoints.pivot):
+        pivot = keypoints.pivot.points[0]
+        if np.hypot(pivot[0] - ellipse.cx, pivot[1] - ellipse.cy) < 0.25 * ellipse.b:
+            centre = (float(pivot[0]), float(pivot[1]))
+    inferred = not (len(keypoints.start) and len(keypoints.end))
+    if inferred:
+        if inliers.sum() < 4:  # with three notches any of the three gaps could be the scale's
+            return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and too few notches to infer them")
+        gap_start, gap_end = _ends_from_gap(dial_angle(ellipse, points[inliers], centre))
+    start = (float(dial_angle(ellipse, keypoints.start.points[:1], centre)[0]) if len(keypoints.start) else gap_start)
+    end = (float(dial_angle(ellipse, keypoints.end.points[:1], centre)[0]) if len(keypoints.end) else gap_end)
+    span = scale_span(start, end)
+    if not MIN_SPAN <= span <= MAX_SPAN:
+        return StageFailure(STAGE, "implausible_span", f"scale spans {np.degrees(span):.0f} degrees")
+    return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred)

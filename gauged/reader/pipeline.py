@@ -1,0 +1,168 @@
+"""The reading pipeline: the stages in order, for one gauge box or for every gauge in an image.
+
+    detect -> crop -> keypoints (crop model) -> ellipse (scale arc) -> needle -> ocr -> scale -> reading
+
+Each stage is a function in its own module returning a result or a :class:`StageFailure`; this module
+only runs them in order, stops at the first failure, and keeps every intermediate result so a debug
+picture or a scale lock can use them. A known scale (configured prior or a locked scale) skips OCR.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Protocol
+
+import numpy as np
+
+from gauged.reader.crop import Crop, crop_gauge
+from gauged.reader.detect import GaugeDetector
+from gauged.reader.ellipse import ScaleArc, fit_scale_arc
+from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
+from gauged.reader.needle import NeedleReading, fit_needle
+from gauged.reader.onnx_model import OnnxModel, to_model_input
+from gauged.reader.reading import Value, read_value
+from gauged.reader.scale import fit_scales, scale_from_prior
+from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
+
+
+class ScaleTextReader(Protocol):
+    """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.ocr`)."""
+
+    def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray) -> tuple[list[ScaleMarker], str | None] | StageFailure:
+        """Scale numbers (crop pixels, parsed values) and the unit, or a failure of stage ``ocr``."""
+
+
+@dataclass(frozen=True)
+class KnownScale:
+    """A scale that needs no OCR: a configured prior (``min``/``max``/``unit``) or a locked scale."""
+
+    min_value: float
+    max_value: float
+    unit: str | None
+
+
+@dataclass
+class GaugeRead:
+    """Everything the pipeline learnt about one gauge in one image; ``failure`` is set when it refused."""
+
+    box: Box
+    score: float
+    crop: Crop | None = None
+    keypoints: CropKeypoints | None = None
+    arc: ScaleArc | None = None
+    needle: NeedleReading | None = None
+    markers: list[ScaleMarker] = field(default_factory=list)
+    scales: list[ScaleModel] = field(default_factory=list)
+    unit: str | None = None
+    value: Value | None = None
+    failure: StageFailure | None = None
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def scale(self) -> ScaleModel | None:
+        return self.scales[0] if self.scales else None
+
+
+class _Timer:
+    """Per-stage wall time for metrics and benchmarks; never feeds a result."""
+
+    def __init__(self, sink: dict[str, float]):
+        self.sink = sink
+
+    def __call__(self, stage: str):
+        return _Span(self.sink, stage)
+
+
+class _Span:
+    def __init__(self, sink: dict[str, float], stage: str):
+        self.sink, self.stage = sink, stage
+
+    def __enter__(self) -> None:
+        self.start = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        self.sink[self.stage] = self.sink.get(self.stage, 0.0) + time.perf_counter() - self.start
+
+
+class GaugeReader:
+    """Reads gauges with the shipped models. Create once; ``read_image`` / ``read_box`` per frame."""
+
+    def __init__(self, crop_model: OnnxModel, detector: GaugeDetector | None = None,
+                 ocr: ScaleTextReader | None = None, min_confidence: float = 0.5, crop_pad: float = 0.08):
+        self.crop_model = crop_model
+        self.detector = detector
+        self.ocr = ocr
+        self.min_confidence = min_confidence
+        self.crop_pad = crop_pad
+
+    @property
+    def crop_size(self) -> int:
+        return self.crop_model.input_size
+
+    def read_image(self, image: np.ndarray, known: KnownScale | None = None,
+                   primary_unit: str | None = None) -> list[GaugeRead] | StageFailure:
+        """Detect every gauge in (H, W, 3) uint8 BGR ``image`` and read each, best detection first."""
+        if self.detector is None:
+            raise RuntimeError("read_image needs a detector; give a box to read_box instead")
+        detections = self.detector.detect(image)
+        if isinstance(detections, StageFailure):
+            return detections
+        return [self.read_box(image, d.box, d.score, known, primary_unit) for d in detections]
+
+    def read_box(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
+                 primary_unit: str | None = None) -> GaugeRead:
+        """Read the gauge inside ``box`` (frame pixels) of (H, W, 3) uint8 BGR ``image``."""
+        result = GaugeRead(box=box, score=score)
+        timer = _Timer(result.seconds)
+        with timer("crop"):
+            crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
+        if isinstance(crop, StageFailure):
+            return replace(result, failure=crop)
+        result.crop = crop
+        with timer("keypoints"):
+            keypoints = decode_crop_maps(self.crop_model(to_model_input(crop.image)), self.crop_size)
+        if isinstance(keypoints, StageFailure):
+            return replace(result, failure=keypoints)
+        result.keypoints = keypoints
+        with timer("ellipse"):
+            arc = fit_scale_arc(keypoints, self.crop_size)
+        if isinstance(arc, StageFailure):
+            return replace(result, failure=arc)
+        result.arc = arc
+        with timer("needle"):
+            needle = fit_needle(keypoints.needle_prob, keypoints.stride, arc)
+        if isinstance(needle, StageFailure):
+            return replace(result, failure=needle)
+        result.needle = needle
+        scales = self._scales(crop, keypoints, arc, known, primary_unit, result, timer)
+        if isinstance(scales, StageFailure):
+            return replace(result, failure=scales)
+        result.scales = scales
+        with timer("reading"):
+            value = read_value(needle, arc, scales[0], self.min_confidence)
+        if isinstance(value, StageFailure):
+            return replace(result, failure=value)
+        result.value = value
+        return result
+
+    def _scales(self, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, known: KnownScale | None,
+                primary_unit: str | None, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | StageFailure:
+        if known is not None:
+            result.unit = known.unit
+            return [scale_from_prior(arc, known.min_value, known.max_value, known.unit)]
+        if self.ocr is None:
+            return StageFailure("ocr", "ocr_unavailable", "no OCR engine and no configured scale")
+        with timer("ocr"):
+            read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points)
+        if isinstance(read, StageFailure):
+            return read
+        markers, unit = read
+        result.markers, result.unit = markers, unit
+        with timer("scale"):
+            scales = fit_scales(arc, markers, unit)
+        if isinstance(scales, StageFailure):
+            return scales
+        if primary_unit and len(scales) > 1:
+            scales.sort(key=lambda s: s.unit != primary_unit)
+        return scales

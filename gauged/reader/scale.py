@@ -1,0 +1,60 @@
+"""The scale of one gauge: angle -> value, from OCR'd scale numbers or from a configured prior.
+
+From OCR (Reitsma et al., Sec. 3.5-3.6): the centres of the recognised numbers are projected onto the
+scale ellipse, and a RANSAC line maps unwrapped dial angle to value
+(:func:`gauged.geometry.scale_fit.fit_scale_model`). Markers inside and outside the scale ellipse are
+fitted separately (dials with a bar and a psi scale); the primary scale is the configured unit's, else
+the one with more inliers.
+
+From a prior (``scale: {min, max}`` in the config): the value runs linearly from ``min`` at the start
+notch to ``max`` at the end notch, no OCR needed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from gauged.geometry.angles import unwrap
+from gauged.geometry.scale_fit import fit_scale_model, split_markers
+from gauged.reader.ellipse import ScaleArc
+from gauged.types import ScaleMarker, ScaleModel, StageFailure
+
+STAGE = "scale"
+REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "range_mismatch")
+
+
+def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: str | None) -> ScaleModel:
+    """Linear scale from ``min_value`` at the start notch to ``max_value`` at the end notch."""
+    start = unwrap(arc.start_angle, arc.zero_angle)
+    end = unwrap(arc.end_angle, arc.zero_angle)
+    slope = (max_value - min_value) / (end - start)
+    return ScaleModel(arc.ellipse, slope, min_value - slope * start, arc.zero_angle, min_value, max_value, unit)
+
+
+def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None = None,
+               min_inliers: int = 3) -> list[ScaleModel] | StageFailure:
+    """Fit one scale per marker group (inside / outside the scale ellipse), best first.
+
+    A scale must have ``min_inliers`` consistent numbers and increase clockwise. Returns the failure of
+    the larger group when no group yields a scale.
+    """
+    groups = sorted((g for g in split_markers(arc.ellipse, list(markers)) if g), key=len, reverse=True)
+    if not groups:
+        return StageFailure(STAGE, "too_few_markers", "no scale number was read")
+    scales: list[ScaleModel] = []
+    first_failure: StageFailure | None = None
+    for group in groups:
+        model = fit_scale_model(arc.ellipse, group, arc.start_angle, arc.end_angle, unit=unit, centre=arc.centre,
+                                min_inliers=min(min_inliers, max(2, len(group))), expected_sign=1)
+        if isinstance(model, StageFailure):
+            first_failure = first_failure or model
+            continue
+        if model.inliers < min_inliers:
+            first_failure = first_failure or StageFailure(
+                STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
+            continue
+        scales.append(model)
+    if not scales:
+        assert first_failure is not None
+        return first_failure
+    return sorted(scales, key=lambda s: s.inliers, reverse=True)

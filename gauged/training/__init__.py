@@ -1,0 +1,1 @@
+"""Training of the project's models (needs the `train` extra: torch). Never imported at run time."""

