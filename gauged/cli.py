@@ -13,6 +13,7 @@ from gauged.logging_setup import configure_logging
 # Each module exposes register(subparsers); the order here is the order in --help.
 COMMAND_MODULES = (
     "gauged.commands.run",
+    "gauged.commands.replay",
     "gauged.commands.check_config",
     "gauged.commands.version",
 )

@@ -78,6 +78,9 @@ class Metrics:
         self.stage_failures = Counter(
             "gauged_stage_failures", "Reader stage failures, by gauge, stage and machine-readable reason.",
             ["gauge", "stage", "reason"], registry=r)
+        self.reads = Counter(
+            "gauged_reads", "Frames on which a gauge was read (the denominator of the stage failure ratio).",
+            ["gauge"], registry=r)
         self.stage_duration = Histogram(
             "gauged_stage_duration_seconds", "Wall time spent in one reader stage.", ["stage"],
             buckets=STAGE_DURATION_BUCKETS_S, registry=r)

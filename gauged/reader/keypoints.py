@@ -100,8 +100,13 @@ def _vertex(left: float, centre: float, right: float) -> float:
     return float(np.clip(0.5 * (left - right) / curvature, -0.5, 0.5))
 
 
-def decode_crop_maps(logits: np.ndarray, crop_size: int, threshold: float = 0.3) -> CropKeypoints | StageFailure:
-    """Turn the crop model's (7, H, W) logits into keypoints. Fails when no notch is found at all."""
+def decode_crop_maps(logits: np.ndarray, crop_size: int, threshold: float = 0.3,
+                     require_notches: bool = True) -> CropKeypoints | StageFailure:
+    """Turn the crop model's (7, H, W) logits into keypoints.
+
+    Fails (``no_notches``) when no notch is found at all, unless ``require_notches`` is False (a
+    locked scale needs only the needle and the pivot).
+    """
     if logits.ndim != 3 or logits.shape[0] != len(CROP_CHANNELS):
         raise ValueError(f"expected ({len(CROP_CHANNELS)}, H, W) logits, got {logits.shape}")
     stride = crop_size // logits.shape[-1]
@@ -111,7 +116,7 @@ def decode_crop_maps(logits: np.ndarray, crop_size: int, threshold: float = 0.3)
               for name in ("start", "end", "tip", "pivot")}
     major = find_peaks(maps["major"], stride, threshold, max_peaks=64, min_distance_cells=2)
     numbers = find_peaks(maps["numbers"], stride, threshold, max_peaks=32, min_distance_cells=3)
-    if len(major) + len(single["start"]) + len(single["end"]) == 0:
+    if require_notches and len(major) + len(single["start"]) + len(single["end"]) == 0:
         return StageFailure(STAGE, "no_notches", "the crop model found no scale notch above threshold")
     return CropKeypoints(start=single["start"], end=single["end"], major=major, tip=single["tip"],
                          pivot=single["pivot"], numbers=numbers, needle_prob=maps["needle"], stride=stride)

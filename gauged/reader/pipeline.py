@@ -10,7 +10,7 @@ picture or a scale lock can use them. A known scale (configured prior or a locke
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -118,32 +118,70 @@ class GaugeReader:
         with timer("crop"):
             crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
         if isinstance(crop, StageFailure):
-            return replace(result, failure=crop)
+            result.failure = crop
+            return result
         result.crop = crop
         with timer("keypoints"):
             keypoints = decode_crop_maps(self.crop_model(to_model_input(crop.image)), self.crop_size)
         if isinstance(keypoints, StageFailure):
-            return replace(result, failure=keypoints)
+            result.failure = keypoints
+            return result
         result.keypoints = keypoints
         with timer("ellipse"):
             arc = fit_scale_arc(keypoints, self.crop_size)
         if isinstance(arc, StageFailure):
-            return replace(result, failure=arc)
+            result.failure = arc
+            return result
         result.arc = arc
         with timer("needle"):
             needle = fit_needle(keypoints.needle_prob, keypoints.stride, arc)
         if isinstance(needle, StageFailure):
-            return replace(result, failure=needle)
+            result.failure = needle
+            return result
         result.needle = needle
         scales = self._scales(crop, keypoints, arc, known, primary_unit, result, timer)
         if isinstance(scales, StageFailure):
-            return replace(result, failure=scales)
+            result.failure = scales
+            return result
         result.scales = scales
         with timer("reading"):
             value = read_value(needle, arc, scales[0], self.min_confidence)
         if isinstance(value, StageFailure):
-            return replace(result, failure=value)
+            result.failure = value
+            return result
         result.value = value
+        return result
+
+    def read_locked(self, image: np.ndarray, box: Box, arc: ScaleArc, scale: ScaleModel) -> GaugeRead:
+        """Read only the needle against a locked scale arc and map (crop pixels of a crop of ``box``).
+
+        The cheap steady-state path of a fixed camera: crop, crop model, needle, value — no ellipse
+        fit, no OCR. ``keypoints.pivot`` is kept so the caller can check the dial has not moved.
+        """
+        result = GaugeRead(box=box, score=1.0, arc=arc, scales=[scale], unit=scale.unit)
+        timer = _Timer(result.seconds)
+        with timer("crop"):
+            crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
+        if isinstance(crop, StageFailure):
+            result.failure = crop
+            return result
+        result.crop = crop
+        with timer("keypoints"):
+            keypoints = decode_crop_maps(self.crop_model(to_model_input(crop.image)), self.crop_size,
+                                         require_notches=False)
+        result.keypoints = keypoints
+        with timer("needle"):
+            needle = fit_needle(keypoints.needle_prob, keypoints.stride, arc)
+        if isinstance(needle, StageFailure):
+            result.failure = needle
+            return result
+        result.needle = needle
+        with timer("reading"):
+            value = read_value(needle, arc, scale, self.min_confidence)
+        if isinstance(value, StageFailure):
+            result.failure = value
+        else:
+            result.value = value
         return result
 
     def _scales(self, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, known: KnownScale | None,
