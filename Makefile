@@ -22,14 +22,18 @@ $(RUN_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
 	@touch $@
 
+# The suite includes a training smoke test, so the test install has the train extra (CPU torch).
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+	$(BIN)/python -m pip install --quiet -e ".[test,train]"
 	@touch $@ $(RUN_STAMP)
 
 run: $(RUN_STAMP)
 	$(BIN)/gauged run
 
+# System tools the deployment tests use (systemd-analyze, promtool, prometheus); as root on CI it
+# installs them with apt, elsewhere it prints the command and the tests that need them skip.
 test: $(TEST_STAMP)
+	bash deploy/ci/install-system-deps.sh
 	$(BIN)/python -m pytest
 
 bench: $(TEST_STAMP)

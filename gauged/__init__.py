@@ -1,6 +1,10 @@
 """gauged: reads analog gauges from camera frames and publishes readings, alarms and metrics."""
 
+import os as _os
 from importlib import metadata as _metadata
+
+# onnxruntime uploads usage telemetry unless told not to; a plant daemon must not phone home.
+_os.environ.setdefault("ORT_DISABLE_TELEMETRY", "1")
 
 try:
     __version__ = _metadata.version("gauged")

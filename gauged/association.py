@@ -9,17 +9,10 @@ reading order, or give each an ROI.
 
 from __future__ import annotations
 
+from gauged.geometry.boxes import box_iou
 from gauged.types import Box, GaugeDetection
 
 MIN_IOU = 0.3
-
-
-def box_iou(a: Box, b: Box) -> float:
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0
 
 
 def _reading_order(detection: GaugeDetection) -> tuple[float, float]:

@@ -83,7 +83,7 @@ class CameraWorker:
                     break
                 continue
             if min_gap_ns and self.last_stamp_ns is not None and 0 <= frame.stamp_ns - self.last_stamp_ns < min_gap_ns:
-                self.metrics.frames_dropped.labels(camera=self.camera.id).inc()
+                self.metrics.frames_skipped.labels(camera=self.camera.id).inc()
                 continue
             self.last_stamp_ns = frame.stamp_ns
             try:

@@ -14,6 +14,7 @@ from gauged.logging_setup import configure_logging
 COMMAND_MODULES = (
     "gauged.commands.run",
     "gauged.commands.replay",
+    "gauged.commands.read",
     "gauged.commands.check_config",
     "gauged.commands.version",
 )

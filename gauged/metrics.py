@@ -72,6 +72,9 @@ class Metrics:
         self.frames_dropped = Counter(
             "gauged_frames_dropped", "Frames replaced by a newer one before the reader took them.",
             ["camera"], registry=r)
+        self.frames_skipped = Counter(
+            "gauged_frames_skipped", "Frames skipped on purpose to keep to the camera's max_rate_hz.",
+            ["camera"], registry=r)
         self.frames_invalid = Counter(
             "gauged_frames_invalid", "Frames that could not be decoded into an image, by reason.",
             ["camera", "reason"], registry=r)
@@ -104,6 +107,7 @@ class Metrics:
         """Create the per-camera frame counters at zero, so dashboards see them before any frame."""
         self.frames_received.labels(camera=camera)
         self.frames_dropped.labels(camera=camera)
+        self.frames_skipped.labels(camera=camera)
 
     def precreate_stage_failures(self, gauges: Iterable[str], pairs: Iterable[tuple[str, str]]) -> None:
         """Create ``gauged_stage_failures_total`` at zero for every gauge x (stage, reason) pair.

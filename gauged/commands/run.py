@@ -74,7 +74,10 @@ def run(args: argparse.Namespace) -> int:
         print(problem, file=sys.stderr)
         return 2
     notifier = SystemdNotifier()
-    print(f"gauged {__version__}\n{summarize(config)}", flush=True)
+    if args.log_format == "json":  # keep journald lines machine-readable
+        log.info("gauged %s starting: %s", __version__, summarize(config).replace("\n", "; "))
+    else:
+        print(f"gauged {__version__}\n{summarize(config)}", flush=True)
     reload_requested, stop_requested = threading.Event(), threading.Event()
     signal.signal(signal.SIGHUP, lambda *_: reload_requested.set())
     signal.signal(signal.SIGTERM, lambda *_: stop_requested.set())
@@ -82,9 +85,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         daemon = Daemon(config)
         daemon.start()
-    except ModelNotAvailable as exc:
+    except ModelNotAvailable as exc:  # an installation problem: exit 2 so systemd does not restart-loop
         log.error("%s", exc)
-        return 1
+        return 2
     notifier.ready(f"reading {len(config.gauges)} gauge(s)")
     watchdog_s = notifier.watchdog_interval_s()
     show_table = args.table == "always" or (args.table == "auto" and sys.stdout.isatty())
@@ -108,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         notifier.stopping()
         daemon.stop()
-    if not show_table:
+    if not show_table and args.log_format != "json":
         print(_table(daemon))
     return 0
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from gauged.geometry.boxes import box_iou
 from gauged.reader.keypoints import sigmoid
 from gauged.reader.onnx_model import OnnxModel, to_model_input
 from gauged.types import GaugeDetection, StageFailure
@@ -71,21 +72,13 @@ def decode_detections(maps: np.ndarray, stride: int, threshold: float = 0.3, max
         ox, oy = sigmoid(maps[3:5, y, x])
         cx, cy = (x + ox) * stride, (y + oy) * stride
         box = np.array([cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2])
-        if any(_iou(box, kept) > nms_iou for kept in boxes):
+        if any(box_iou(box, kept) > nms_iou for kept in boxes):
             continue
         boxes.append(box)
         scores.append(float(heat[y, x]))
         if len(boxes) == max_gauges:
             break
     return np.asarray(boxes, float).reshape(-1, 4), np.asarray(scores, float)
-
-
-def _iou(a: np.ndarray, b: np.ndarray) -> float:
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0
 
 
 class GaugeDetector:

@@ -96,12 +96,3 @@ def load_substation_dials(root: Path) -> list[DialSample]:
         stem = Path(name).stem
         samples.append(DialSample(root / "images" / name, root / "masks" / f"{stem}.png", tuple(float(v) for v in box)))
     return sorted(samples, key=lambda s: int(re.sub(r"\D", "", s.image_path.stem) or 0))
-
-
-def box_iou(a: tuple[float, ...] | np.ndarray, b: tuple[float, ...] | np.ndarray) -> float:
-    """Intersection over union of two (x0, y0, x1, y1) boxes."""
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0

@@ -1,0 +1,1 @@
+"""Evaluation of models and readings against labelled data (numpy only; no torch)."""

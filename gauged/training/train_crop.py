@@ -1,0 +1,189 @@
+"""Train the crop model on pre-rendered shards (synthetic crops + real needle photos) and export ONNX.
+
+    python -m gauged.training.train_crop --shards data/crop-synth data/needle-real \
+        --val data/crop-synth-val --real-val ../shared/datasets/needle-polygons --run runs/crop
+
+Each epoch: a fresh permutation of every shard's samples, random affine + photometric augmentation,
+targets drawn at stride 2 (keypoint Gaussians, needle coverage), focal + BCE/Dice loss. Validation
+after every epoch: notch recall and unassigned share within 4 px at 448 px on the synthetic
+validation shard, needle IoU and direction on the real validation photos.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from gauged.evaluation.model_metrics import angle_error_deg, mask_direction, mask_iou, match_points
+from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps
+from gauged.training.augment import photometric, random_affine, warp_image, warp_points
+from gauged.training.loop import TrainSettings, train
+from gauged.training.losses import crop_loss
+from gauged.training.nets import CropNet, count_parameters
+from gauged.training.real_data import load_needle_split
+from gauged.training.shards import CropSample, open_crop_shard
+from gauged.training.targets import crop_targets
+
+log = logging.getLogger(__name__)
+
+HEATMAPS = CROP_CHANNELS[:-1]
+
+
+def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One training example: (3, S, S) float32 input, (C, S/2, S/2) targets, (C,) validity."""
+    if strength > 0:
+        matrix = random_affine(size, rng, max_rotation_deg=180 * strength,
+                               scale_range=(1 - 0.15 * strength, 1 + 0.1 * strength), max_shift=0.05 * strength)
+    else:
+        matrix = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    image = photometric(warp_image(sample.image, matrix, size), rng) if strength > 0 else sample.image
+    needle = None if sample.needle is None else warp_image(sample.needle, matrix, size, nearest=True)
+    points = {name: (None if sample.points.get(name) is None else warp_points(np.asarray(sample.points[name]), matrix))
+              for name in HEATMAPS}
+    target, valid = crop_targets(points, needle, size, CROP_CHANNELS)
+    x = image[:, :, ::-1].astype(np.float32).transpose(2, 0, 1) / 255.0
+    return np.ascontiguousarray(x), target, valid
+
+
+def make_batches(shards, size: int, batch: int, seed: int, weights: list[float]):
+    def batches(epoch: int):
+        rng = np.random.default_rng(seed * 1000 + epoch)
+        entries = []
+        for index, (shard, weight) in enumerate(zip(shards, weights)):
+            picks = rng.choice(len(shard), int(round(len(shard) * weight)), replace=weight > 1)
+            entries += [(index, int(i)) for i in picks]
+        order = rng.permutation(len(entries))
+        for start in range(0, len(order) - batch + 1, batch):
+            xs, ts, vs = zip(*(augmented(shards[s].sample(i), size, rng, 1.0) for s, i in (entries[k] for k in order[start:start + batch])))
+            x = torch.from_numpy(np.stack(xs)).contiguous(memory_format=torch.channels_last)
+            yield x, torch.from_numpy(np.stack(ts)), torch.from_numpy(np.stack(vs))
+    return batches
+
+
+def _loss(model, batch):
+    x, target, valid = batch
+    return crop_loss(model(x), target, valid)
+
+
+def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> dict[str, float]:
+    """Notch metrics on synthetic crops, needle IoU/direction on real photos."""
+    tol = 4.0 * size / 448
+    recall_num = recall_den = unassigned = predicted = ends_found = ends_total = 0
+    ious, errors = [], []
+    with torch.no_grad():
+        if synth_val is not None:
+            for index in range(min(limit, len(synth_val))):
+                sample = synth_val.sample(index)
+                logits = model(torch.from_numpy(augmented(sample, size, None, 0.0)[0][None]))[0].numpy()
+                keypoints = decode_crop_maps(logits, size, require_notches=False)
+                match = match_points(keypoints.major.points, np.asarray(sample.points.get("major") or []).reshape(-1, 2), tol)
+                recall_num += match.matched
+                recall_den += match.labelled
+                unassigned += match.unassigned
+                predicted += match.predicted
+                for name in ("start", "end"):
+                    truth = sample.points.get(name)
+                    if truth:
+                        ends_total += 1
+                        peaks = getattr(keypoints, name)
+                        ends_found += int(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - np.asarray(truth[0])) <= tol)
+        for image, mask in real_val[:limit]:
+            logits = model(torch.from_numpy(image[None]))[0, -1].numpy()
+            pred = logits > 0
+            truth = mask[::2, ::2] > 0 if mask.shape[0] == 2 * pred.shape[0] else mask
+            ious.append(mask_iou(pred, truth))
+            centre = (pred.shape[1] / 2, pred.shape[0] / 2)
+            a, b = mask_direction(pred, centre), mask_direction(truth, centre)
+            errors.append(180.0 if a is None or b is None else angle_error_deg(a, b))
+    metrics = {
+        "notch_recall": recall_num / max(1, recall_den),
+        "notch_unassigned": unassigned / max(1, predicted),
+        "ends_found": ends_found / max(1, ends_total),
+        "needle_iou": float(np.mean(ious)) if ious else float("nan"),
+        "needle_dir_3deg": float(np.mean(np.asarray(errors) <= 3.0)) if errors else float("nan"),
+    }
+    parts = [metrics["notch_recall"], metrics["ends_found"]] if synth_val is not None else []
+    if ious:
+        parts += [metrics["needle_iou"], metrics["needle_dir_3deg"]]
+    metrics["score"] = float(np.mean(parts)) if parts else 0.0
+    return metrics
+
+
+def load_real_needle_val(root: Path, size: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The needle-polygons ``valid`` photos resized to the model input, with masks at full input size."""
+    import cv2
+
+    out = []
+    for sample in load_needle_split(root, "valid"):
+        image, mask = sample.load()
+        image = cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)
+        mask = cv2.resize(mask, (size // 2, size // 2), interpolation=cv2.INTER_NEAREST)
+        x = image[:, :, ::-1].astype(np.float32).transpose(2, 0, 1) / 255.0
+        out.append((np.ascontiguousarray(x), mask))
+    return out
+
+
+def export_onnx(model: CropNet, size: int, path: Path, metadata: dict) -> None:
+    import onnx
+
+    model.eval()
+    torch.onnx.export(model, torch.zeros(1, 3, size, size), str(path), opset_version=17, input_names=["image"],
+                      output_names=["maps"], dynamo=False)
+    proto = onnx.load(str(path))
+    entry = proto.metadata_props.add()
+    entry.key, entry.value = "gauged", json.dumps(metadata)
+    onnx.save(proto, str(path))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--shards", nargs="+", type=Path, required=True, help="training crop shards")
+    parser.add_argument("--weights", nargs="*", type=float, help="per-shard sampling weight per epoch (default 1)")
+    parser.add_argument("--val", type=Path, help="synthetic validation crop shard")
+    parser.add_argument("--real-val", type=Path, help="needle-polygons folder (its valid split is used)")
+    parser.add_argument("--run", type=Path, required=True, help="run directory (checkpoints, history)")
+    parser.add_argument("--size", type=int, default=224)
+    parser.add_argument("--epochs", type=int, default=10)
+    parser.add_argument("--batch", type=int, default=24)
+    parser.add_argument("--lr", type=float, default=2e-3)
+    parser.add_argument("--scratch", action="store_true", help="random init instead of ImageNet EfficientNet-Lite0")
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    torch.set_num_threads(args.threads)
+    torch.manual_seed(args.seed)
+    shards = [open_crop_shard(p) for p in args.shards]
+    weights = args.weights or [1.0] * len(shards)
+    synth_val = open_crop_shard(args.val) if args.val else None
+    real_val = load_real_needle_val(args.real_val, args.size) if args.real_val else []
+    # channels_last makes the depthwise convolutions' backward pass ~1.7x faster on CPU (measured).
+    model = CropNet(args.size, pretrained=not args.scratch).to(memory_format=torch.channels_last)
+    log.info("crop model: %d parameters, %s init; %s training samples", count_parameters(model),
+             "scratch" if args.scratch else "ImageNet", [len(s) for s in shards])
+    steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch
+    started = time.monotonic()
+    best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights), steps, _loss,
+                 lambda m: validate_crop(m, synth_val, real_val, args.size),
+                 TrainSettings(epochs=args.epochs, lr=args.lr), args.run)
+    log.info("best: %s (%.0f min)", json.dumps(best), (time.monotonic() - started) / 60)
+    if args.export:
+        state = torch.load(args.run / "best.pt", map_location="cpu", weights_only=False)
+        model.load_state_dict(state["model"])
+        export_onnx(model, args.size, args.export, {"kind": "crop", "size": args.size, "stride": 2,
+                                                    "channels": list(CROP_CHANNELS), "metrics": best,
+                                                    "init": "scratch" if args.scratch else "imagenet"})
+        log.info("exported %s", args.export)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,74 @@
+"""Training smoke test: a few steps of each net on tiny inputs, exported to ONNX and run by the runtime."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
+
+from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps  # noqa: E402
+from gauged.reader.onnx_model import OnnxModel  # noqa: E402
+from gauged.training.loop import TrainSettings, train  # noqa: E402
+from gauged.training.losses import crop_loss, detector_loss  # noqa: E402
+from gauged.training.nets import CropNet, DetNet  # noqa: E402
+from gauged.training.shards import CropSample  # noqa: E402
+from gauged.training.train_crop import augmented, export_onnx  # noqa: E402
+from gauged.training.targets import detector_targets  # noqa: E402
+
+SIZE = 64
+
+
+def tiny_sample(rng: np.random.Generator) -> CropSample:
+    image = rng.integers(0, 255, (SIZE, SIZE, 3), dtype=np.uint8)
+    needle = np.zeros((SIZE, SIZE), np.uint8)
+    needle[30:34, 32:60] = 1
+    points = {"start": [[10.0, 50.0]], "end": [[54.0, 50.0]], "major": [[10.0, 50.0], [32.0, 8.0], [54.0, 50.0]],
+              "tip": [[58.0, 32.0]], "pivot": [[32.0, 32.0]], "numbers": []}
+    return CropSample(image, points, needle, "smoke")
+
+
+def test_crop_training_resumes_and_exports_onnx(tmp_path):
+    rng = np.random.default_rng(0)
+    samples = [tiny_sample(rng) for _ in range(4)]
+
+    def batches(epoch):
+        x, t, v = zip(*(augmented(s, SIZE, np.random.default_rng(epoch), 1.0) for s in samples))
+        yield torch.from_numpy(np.stack(x)), torch.from_numpy(np.stack(t)), torch.from_numpy(np.stack(v))
+
+    model = CropNet(SIZE, pretrained=False, width=16)
+    settings = TrainSettings(epochs=1, warmup_steps=1)
+    first = train(model, batches, 1, lambda m, b: crop_loss(m(b[0]), b[1], b[2]), lambda m: {"score": 0.5},
+                  settings, tmp_path / "run")
+    assert first == {"score": 0.5} and (tmp_path / "run" / "last.pt").exists()
+    settings.epochs = 2  # resume: runs only the second epoch
+    train(model, batches, 1, lambda m, b: crop_loss(m(b[0]), b[1], b[2]), lambda m: {"score": 0.6},
+          settings, tmp_path / "run")
+    history = (tmp_path / "run" / "history.jsonl").read_text().splitlines()
+    assert len(history) == 2
+    export_onnx(model, SIZE, tmp_path / "crop.onnx", {"kind": "crop", "size": SIZE, "stride": 2})
+    runtime = OnnxModel(tmp_path / "crop.onnx", threads=1)
+    assert runtime.metadata["kind"] == "crop" and runtime.input_size == SIZE
+    logits = runtime(np.zeros((SIZE, SIZE, 3), np.float32))
+    assert logits.shape == (len(CROP_CHANNELS), SIZE // 2, SIZE // 2)
+    with torch.no_grad():
+        expected = model.eval()(torch.zeros(1, 3, SIZE, SIZE))[0].numpy()
+    assert np.allclose(logits, expected, atol=1e-4)
+    decode_crop_maps(logits, SIZE, require_notches=False)  # decodes without error whatever it learnt
+
+
+def test_detector_loss_decreases_on_one_batch():
+    torch.manual_seed(0)
+    model = DetNet(64, pretrained=False, width=16)
+    maps, weight = detector_targets(np.array([[10.0, 12.0, 40.0, 44.0]]), 64)
+    x = torch.rand(2, 3, 64, 64)
+    maps_t, weight_t = torch.from_numpy(np.stack([maps, maps])), torch.from_numpy(np.stack([weight, weight]))
+    optimizer = torch.optim.Adam(model.parameters(), 1e-2)
+    losses = []
+    for _ in range(15):
+        loss = detector_loss(model(x), maps_t, weight_t)["loss"]
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+        losses.append(float(loss))
+    assert losses[-1] < 0.5 * losses[0]
