@@ -1,0 +1,126 @@
+"""End-to-end reading accuracy on a labelled folder, reported the way Reitsma et al. (Tab. 3) do.
+
+Labels: ``labels.json`` (a list) or ``labels.jsonl`` (one object per line) with ``image``, ``reading``,
+``min`` and ``max`` per image — the format of ``../shared/datasets/gauge-readings-dev``. The relative
+error of an image is ``|pred - reading| / (max - min)``. A refused image counts as a failure; errors
+are averaged over attempted images, and over all images with a failure counted as 100%. Images whose
+true reading sits at a scale end (needle at rest) are reported separately, so a reader that always
+answers "minimum" cannot look good.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gauged.types import StageFailure
+
+
+@dataclass(frozen=True)
+class Label:
+    image: str
+    reading: float
+    min: float
+    max: float
+
+    @property
+    def at_rest(self) -> bool:
+        span = self.max - self.min
+        return min(abs(self.reading - self.min), abs(self.reading - self.max)) <= 0.005 * span
+
+
+@dataclass(frozen=True)
+class Outcome:
+    label: Label
+    value: float | None
+    failure: StageFailure | None
+
+    @property
+    def relative_error(self) -> float | None:
+        if self.value is None:
+            return None
+        return abs(self.value - self.label.reading) / (self.label.max - self.label.min)
+
+
+def load_labels(folder: Path) -> list[Label]:
+    """Labels of ``folder`` from labels.json or labels.jsonl, in file order."""
+    if (folder / "labels.json").is_file():
+        items = json.loads((folder / "labels.json").read_text())
+    elif (folder / "labels.jsonl").is_file():
+        items = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines() if line.strip()]
+    else:
+        raise FileNotFoundError(f"{folder} has neither labels.json nor labels.jsonl")
+    return [Label(str(i["image"]), float(i["reading"]), float(i["min"]), float(i["max"])) for i in items]
+
+
+def image_path(folder: Path, label: Label) -> Path:
+    for candidate in (folder / label.image, folder / "images" / label.image):
+        if candidate.is_file():
+            return candidate
+    return folder / "images" / label.image
+
+
+@dataclass
+class Summary:
+    count: int
+    failures: int
+    mean_error: float  # over attempted
+    median_error: float  # over attempted
+    mean_error_all: float  # failures counted as 100%
+    max_error: float
+    by_reason: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def failure_rate(self) -> float:
+        return self.failures / self.count if self.count else 0.0
+
+    def to_dict(self) -> dict:
+        return {"count": self.count, "failures": self.failures, "failure_rate": self.failure_rate,
+                "mean_relative_error": self.mean_error, "median_relative_error": self.median_error,
+                "mean_relative_error_all": self.mean_error_all, "max_relative_error": self.max_error,
+                "failures_by_reason": self.by_reason}
+
+
+def summarize(outcomes: list[Outcome]) -> Summary:
+    errors = np.array([o.relative_error for o in outcomes if o.relative_error is not None], float)
+    failures = [o for o in outcomes if o.value is None]
+    all_errors = np.concatenate([errors, np.ones(len(failures))]) if outcomes else np.zeros(0)
+    reasons = Counter(f"{o.failure.stage}/{o.failure.reason}" for o in failures if o.failure is not None)
+    nan = float("nan")
+    return Summary(len(outcomes), len(failures),
+                   float(errors.mean()) if len(errors) else nan, float(np.median(errors)) if len(errors) else nan,
+                   float(all_errors.mean()) if len(all_errors) else nan, float(errors.max()) if len(errors) else nan,
+                   dict(sorted(reasons.items())))
+
+
+def evaluate(labels: list[Label], read: Callable[[Label], tuple[float | None, StageFailure | None]]) -> list[Outcome]:
+    return [Outcome(label, *read(label)) for label in labels]
+
+
+def report(outcomes: list[Outcome]) -> dict:
+    """The whole table: all images, the needle-at-rest subset and the rest."""
+    return {
+        "all": summarize(outcomes).to_dict(),
+        "needle_at_rest": summarize([o for o in outcomes if o.label.at_rest]).to_dict(),
+        "needle_off_rest": summarize([o for o in outcomes if not o.label.at_rest]).to_dict(),
+        "images": [{"image": o.label.image, "truth": o.label.reading, "value": o.value,
+                    "relative_error": o.relative_error,
+                    "failure": None if o.failure is None else o.failure.to_dict()} for o in outcomes],
+    }
+
+
+def format_table(result: dict) -> str:
+    lines = [f"{'subset':<16} {'images':>6} {'failed':>7} {'mean err':>9} {'median':>8} {'mean(all)':>9} {'max err':>8}"]
+    for name in ("all", "needle_at_rest", "needle_off_rest"):
+        s = result[name]
+        lines.append(f"{name:<16} {s['count']:>6} {s['failure_rate']:>7.1%} {s['mean_relative_error']:>9.2%} "
+                     f"{s['median_relative_error']:>8.2%} {s['mean_relative_error_all']:>9.2%} {s['max_relative_error']:>8.2%}")
+    reasons = result["all"]["failures_by_reason"]
+    if reasons:
+        lines.append("failures: " + ", ".join(f"{k} {v}" for k, v in reasons.items()))
+    return "\n".join(lines)

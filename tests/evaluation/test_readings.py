@@ -1,0 +1,35 @@
+from __future__ import annotations
+
+import json
+import math
+
+from gauged.evaluation.readings import Label, evaluate, format_table, load_labels, report
+from gauged.types import StageFailure
+
+
+def test_report_counts_failures_and_separates_needle_at_rest(tmp_path):
+    labels = [Label("a.jpg", 5.0, 0, 10), Label("b.jpg", 0.0, 0, 10), Label("c.jpg", 2.0, 0, 10), Label("d.jpg", 10.0, 0, 10)]
+    answers = {"a.jpg": (5.5, None), "b.jpg": (0.0, None), "c.jpg": (None, StageFailure("ocr", "no_numbers")),
+               "d.jpg": (9.0, None)}
+    result = report(evaluate(labels, lambda label: answers[label.image]))
+    everything = result["all"]
+    assert everything["count"] == 4 and everything["failures"] == 1
+    assert math.isclose(everything["mean_relative_error"], (0.05 + 0 + 0.1) / 3)
+    assert math.isclose(everything["mean_relative_error_all"], (0.05 + 0 + 0.1 + 1.0) / 4)
+    assert math.isclose(everything["max_relative_error"], 0.1)
+    assert everything["failures_by_reason"] == {"ocr/no_numbers": 1}
+    assert result["needle_at_rest"]["count"] == 2 and result["needle_off_rest"]["count"] == 2
+    assert "needle_at_rest" in format_table(result)
+
+
+def test_load_labels_reads_json_and_jsonl(tmp_path):
+    (tmp_path / "labels.json").write_text(json.dumps([{"image": "x.jpg", "reading": 1, "min": 0, "max": 4}]))
+    assert load_labels(tmp_path) == [Label("x.jpg", 1.0, 0.0, 4.0)]
+    (tmp_path / "labels.json").unlink()
+    (tmp_path / "labels.jsonl").write_text('{"image": "y.png", "reading": -1, "min": -1, "max": 3}\n')
+    assert load_labels(tmp_path)[0].at_rest
+
+
+def test_load_labels_on_the_real_dev_set(shared_datasets):
+    labels = load_labels(shared_datasets / "gauge-readings-dev")
+    assert len(labels) == 21 and all(l.max > l.min for l in labels)
