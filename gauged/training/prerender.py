@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from gauged.training.real_data import load_needle_split
-from gauged.training.shards import CropSample, write_crop_shard
+from gauged.training.shards import CropSample, DetectorSample, write_crop_shard, write_detector_shard
 
 log = logging.getLogger(__name__)
 
@@ -30,6 +30,51 @@ def real_needle_samples(root: Path, split: str, size: int) -> Iterator[CropSampl
                          f"needle-polygons/{split}/{sample.image_path.name}")
 
 
+def _render_one(args: tuple[int, int]) -> CropSample:
+    from gauged.training.dial_renderer import render_crop
+
+    seed, size = args
+    image, labels = render_crop(seed, size)
+    points = {name: pts.tolist() for name, pts in labels.points.items()}
+    return CropSample(image, points, labels.needle, f"dial_renderer/{seed}")
+
+
+def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[CropSample]:
+    """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order."""
+    from multiprocessing import Pool
+
+    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
+    with Pool(workers) as pool:
+        for index, sample in enumerate(pool.imap(_render_one, jobs, chunksize=16)):
+            if index % 1000 == 0:
+                log.info("rendered %d/%d crops", index, count)
+            yield sample
+
+
+def _render_scene(args: tuple[int, int]) -> DetectorSample:
+    from gauged.reader.detect import Letterbox
+    from gauged.training.dial_renderer import render_scene
+
+    seed, size = args
+    # Rendered at 640x360: the detector sees frames letterboxed to ~320 px, so more pixels buy nothing.
+    image, boxes = render_scene(seed, 640, 360)
+    letterbox = Letterbox.fit(image.shape[1], image.shape[0], size)
+    offset = [letterbox.dx, letterbox.dy, letterbox.dx, letterbox.dy]
+    scaled = [list(np.asarray(b) * letterbox.scale + offset) for b in boxes]
+    return DetectorSample(letterbox.apply(image), scaled, f"dial_renderer/scene/{seed}")
+
+
+def synthetic_scene_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[DetectorSample]:
+    from multiprocessing import Pool
+
+    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
+    with Pool(workers) as pool:
+        for index, sample in enumerate(pool.imap(_render_scene, jobs, chunksize=8)):
+            if index % 500 == 0:
+                log.info("rendered %d/%d scenes", index, count)
+            yield sample
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="what", required=True)
@@ -38,12 +83,29 @@ def main(argv: list[str] | None = None) -> int:
     needles.add_argument("--split", default="train")
     needles.add_argument("--size", type=int, default=256)
     needles.add_argument("--out", type=Path, required=True)
+    crops = sub.add_parser("crops", help="synthetic dial crops -> crop shard")
+    crops.add_argument("--seed", type=int, default=0, help="first seed (held-out sets use a disjoint range)")
+    crops.add_argument("--count", type=int, required=True)
+    crops.add_argument("--size", type=int, default=224)
+    crops.add_argument("--out", type=Path, required=True)
+    scenes = sub.add_parser("scenes", help="synthetic camera frames with several dials -> detector shard")
+    scenes.add_argument("--seed", type=int, default=0)
+    scenes.add_argument("--count", type=int, required=True)
+    scenes.add_argument("--size", type=int, default=320)
+    scenes.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     if args.what == "needles":
         count = len(load_needle_split(args.root, args.split))
         written = write_crop_shard(args.out, real_needle_samples(args.root, args.split, args.size), count, args.size)
         log.info("wrote %d needle photos to %s", written, args.out)
+    elif args.what == "crops":
+        written = write_crop_shard(args.out, synthetic_crop_samples(args.seed, args.count, args.size), args.count, args.size)
+        log.info("wrote %d synthetic crops to %s", written, args.out)
+    elif args.what == "scenes":
+        written = write_detector_shard(args.out, synthetic_scene_samples(args.seed, args.count, args.size), args.count,
+                                       args.size)
+        log.info("wrote %d synthetic scenes to %s", written, args.out)
     return 0
 
 
