@@ -16,6 +16,7 @@ COMMAND_MODULES = (
     "gauged.commands.replay",
     "gauged.commands.read",
     "gauged.commands.eval",
+    "gauged.commands.synth",
     "gauged.commands.check_config",
     "gauged.commands.version",
 )

@@ -87,8 +87,14 @@ def _p16(point) -> tuple[int, int]:
     return (int(round((point[0] - 0.5) * 16)), int(round((point[1] - 0.5) * 16)))
 
 
-def draw_dial(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarray, dict]:
-    """Frontal dial on a CANVAS² image: (image, alpha mask of the dial, points, needle mask, facts)."""
+def draw_dial(rng: np.random.Generator, value: float | None = None, scale_range: tuple[float, float] | None = None,
+              unit: str | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarray, dict]:
+    """Frontal dial on a CANVAS² image: (image, alpha mask of the dial, points, needle mask, facts).
+
+    The same generator state always draws the same dial; ``value``, ``scale_range`` and ``unit``, when
+    given, replace the random ones without changing any other random choice (so a sequence can move
+    the needle of one fixed dial).
+    """
     s = CANVAS
     cx = cy = s / 2
     face_r = s * 0.42
@@ -104,6 +110,8 @@ def draw_dial(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, dict[st
     cv2.circle(image, _p16((cx, cy)), int((face_r + bezel) * 16), bezel_colour, -1, cv2.LINE_AA, 4)
     cv2.circle(image, _p16((cx, cy)), int(face_r * 16), face, -1, cv2.LINE_AA, 4)
     lo, hi = RANGES[int(rng.integers(len(RANGES)))]
+    if scale_range is not None:
+        lo, hi = scale_range
     step = nice_step(hi - lo, rng)
     span = math.radians(rng.choice([270, 270, 270, 240, 180, 300, 90 + 240 * rng.random()]))
     start = math.pi / 2 + (2 * math.pi - span) / 2  # gap centred at the bottom; the warp rotates it
@@ -155,19 +163,21 @@ def draw_dial(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, dict[st
         number_centres.append(centre)
         _put_text(image, text, centre, font, font_scale, text_thick, ink,
                   math.degrees(angle_of(v)) + 90 if radial_text else 0.0)
-    unit = UNITS[int(rng.integers(len(UNITS)))]
+    drawn_unit = UNITS[int(rng.integers(len(UNITS)))]
+    unit = unit or drawn_unit
     _put_text(image, unit, (cx, cy + face_r * rng.uniform(0.25, 0.45)), font, font_scale * 1.1, text_thick, ink, 0)
     for _ in range(int(rng.integers(0, 3))):
         _put_text(image, DISTRACTORS[int(rng.integers(len(DISTRACTORS)))],
                   (cx + face_r * rng.uniform(-0.3, 0.3), cy + face_r * rng.uniform(-0.45, 0.55)), font,
                   font_scale * rng.uniform(0.4, 0.8), max(1, text_thick // 2), ink, 0)
     # needle
-    if rng.random() < 0.12:
-        value = lo  # at rest
-        needle_angle = start - rng.uniform(0, 0.05)
+    at_rest, rest_offset, drawn = rng.random() < 0.12, rng.uniform(0, 0.05), float(rng.uniform(lo, hi))
+    if value is not None:
+        needle_angle = angle_of(min(max(value, lo), hi))
+    elif at_rest:
+        value, needle_angle = lo, start - rest_offset  # resting against the stop pin
     else:
-        value = float(rng.uniform(lo, hi))
-        needle_angle = angle_of(value)
+        value, needle_angle = drawn, angle_of(drawn)
     needle_colour = (30, 30, 210) if rng.random() < 0.35 else ((240, 240, 240) if dark else (20, 20, 20))
     length = scale_r * rng.uniform(0.8, 1.02)
     tail = face_r * rng.uniform(0.0, 0.3)
