@@ -42,6 +42,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     models.add_argument("--json", action="store_true")
     models.add_argument("--threads", type=int, default=2)
     models.set_defaults(func=run_models)
+    recording = sub.add_parser(
+        "recording", help="readings of a replay against a synthetic recording's truth channel",
+        description="Compare the /gauged/readings of READINGS.mcap (from gauged replay) with the /<camera>/truth "
+        "channel of the synthetic RECORDING.mcap: per gauge, failures and relative error of raw and smoothed values.",
+        epilog="example: gauged replay recordings/demo.mcap --config recordings/demo.yaml --out /tmp/out.mcap && "
+        "gauged eval recording recordings/demo.mcap /tmp/out.mcap")
+    recording.add_argument("recording", type=Path)
+    recording.add_argument("readings", type=Path)
+    recording.add_argument("--json", action="store_true")
+    recording.set_defaults(func=run_recording)
 
 
 def run_readings(args: argparse.Namespace) -> int:
@@ -81,4 +91,16 @@ def run_models(args: argparse.Namespace) -> int:
         log.error("%s", exc)
         return 1
     print(json.dumps(result, indent=1) if args.json else format_models(result))
+    return 0
+
+
+def run_recording(args: argparse.Namespace) -> int:
+    from gauged.evaluation.recording import compare, format_comparison
+
+    for path in (args.recording, args.readings):
+        if not path.is_file():
+            print(f"{path}: no such file", file=sys.stderr)
+            return 2
+    result = compare(args.recording, args.readings)
+    print(json.dumps(result, indent=1) if args.json else format_comparison(result))
     return 0

@@ -24,7 +24,8 @@ from gauged.reader.keypoints import CropKeypoints
 from gauged.types import Ellipse, StageFailure
 
 STAGE = "ellipse"
-REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends", "implausible_span")
+REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends", "implausible_span",
+           "numbers_outside_scale")
 
 MIN_SPAN = np.radians(60.0)
 MAX_SPAN = np.radians(350.0)
@@ -145,4 +146,14 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     span = scale_span(start, end)
     if not MIN_SPAN <= span <= MAX_SPAN:
         return StageFailure(STAGE, "implausible_span", f"scale spans {np.degrees(span):.0f} degrees")
+    if len(keypoints.numbers):
+        # Scale numbers sit beside the scale, never in its gap: numbers there mean the ends are wrong
+        # (typically notches the model missed made a false gap).
+        margin = np.radians(12.0)
+        angles = dial_angle(ellipse, keypoints.numbers.points, centre)
+        offset = np.mod(angles - start, 2 * np.pi)  # 0 at the start, span at the end
+        outside = (offset > span + margin) & (offset < 2 * np.pi - margin)
+        if outside.any():
+            return StageFailure(STAGE, "numbers_outside_scale",
+                                f"{int(outside.sum())} scale number(s) lie in the gap between the scale ends")
     return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred)

@@ -6,7 +6,7 @@ import logging
 
 from gauged.config.model import ReaderConfig
 from gauged.reader.detect import GaugeDetector
-from gauged.reader.onnx_model import OnnxModel, packaged_model_path
+from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path
 from gauged.reader.pipeline import GaugeReader
 
 log = logging.getLogger(__name__)
@@ -16,9 +16,16 @@ DETECTOR_MODEL = "detector.onnx"
 
 
 def build_reader(config: ReaderConfig) -> GaugeReader:
-    """The reader with both models; raises :class:`ModelNotAvailable` naming a missing model file."""
+    """The reader; raises :class:`ModelNotAvailable` when the crop model is missing.
+
+    Without the detector model, gauges need an ROI, and a photo is read as one gauge filling it.
+    """
     crop = OnnxModel(packaged_model_path(CROP_MODEL), config.threads)
-    detector = GaugeDetector(OnnxModel(packaged_model_path(DETECTOR_MODEL), config.threads))
+    try:
+        detector = GaugeDetector(OnnxModel(packaged_model_path(DETECTOR_MODEL), config.threads))
+    except ModelNotAvailable as exc:
+        log.warning("%s; gauges without an roi cannot be found, photos are read as one gauge", exc)
+        detector = None
     ocr = None
     try:
         from gauged.reader.ocr import ScaleTextReader

@@ -102,9 +102,13 @@ class GaugeReader:
 
     def read_image(self, image: np.ndarray, known: KnownScale | None = None,
                    primary_unit: str | None = None) -> list[GaugeRead] | StageFailure:
-        """Detect every gauge in (H, W, 3) uint8 BGR ``image`` and read each, best detection first."""
+        """Detect every gauge in (H, W, 3) uint8 BGR ``image`` and read each, best detection first.
+
+        Without a detector the whole image is read as one gauge (a photo cropped to the dial).
+        """
         if self.detector is None:
-            raise RuntimeError("read_image needs a detector; give a box to read_box instead")
+            height, width = image.shape[:2]
+            return [self.read_box(image, (0.0, 0.0, float(width), float(height)), 1.0, known, primary_unit)]
         detections = self.detector.detect(image)
         if isinstance(detections, StageFailure):
             return detections

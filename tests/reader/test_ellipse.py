@@ -72,3 +72,22 @@ def test_fit_scale_arc_no_scale_ends():
     keypoints = keypoints_for(Dial(majors=3), start=False, end=False)
     failure = fit_scale_arc(keypoints, CROP, min_notches=3)
     assert not failure and failure.reason == "no_scale_ends"
+
+
+def test_fit_scale_arc_numbers_in_the_gap_refute_inferred_ends():
+    from gauged.geometry.dial_frame import point_at_dial_angle
+    from gauged.reader.keypoints import find_peaks
+    from gauged.training.targets import gaussian_heatmap
+
+    dial = Dial(start_deg=135, span_deg=270)
+    # The model found only the notches of the upper half, so the largest gap is a false one...
+    upper = dial.notch_points()[4:9]
+    keypoints = keypoints_for(dial, start=False, end=False, majors=upper)
+    # ...but numbers printed along the whole scale contradict it.
+    numbers = point_at_dial_angle(dial.ellipse.scaled(0.8), dial.notch_angles())
+    peaks = find_peaks(gaussian_heatmap(numbers, (128, 128), 2, 1.5), 2, 0.3, 64, 3)
+    from dataclasses import replace
+
+    failure = fit_scale_arc(replace(keypoints, numbers=peaks), CROP)
+    assert not failure and failure.reason == "numbers_outside_scale"
+    assert fit_scale_arc(keypoints, CROP)  # without the numbers the false gap is accepted
