@@ -2,6 +2,9 @@
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
+# The OCR engine: its wheel carries the PP-OCRv4 ONNX models; --no-deps keeps opencv-python (which
+# clashes with opencv-python-headless) out. Its real dependencies are in pyproject.toml.
+OCR_PACKAGE := rapidocr-onnxruntime==1.4.4
 # Re-install whenever pyproject.toml changes.
 RUN_STAMP  := $(VENV)/.installed-run
 TEST_STAMP := $(VENV)/.installed-test
@@ -20,11 +23,13 @@ $(BIN)/python:
 
 $(RUN_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -m pip install --quiet --no-deps $(OCR_PACKAGE)
 	@touch $@
 
 # The suite includes a training smoke test, so the test install has the train extra (CPU torch).
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test,train]"
+	$(BIN)/python -m pip install --quiet --no-deps $(OCR_PACKAGE)
 	@touch $@ $(RUN_STAMP)
 
 run: $(RUN_STAMP)

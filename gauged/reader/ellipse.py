@@ -27,6 +27,7 @@ STAGE = "ellipse"
 REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends", "implausible_span",
            "numbers_outside_scale")
 
+OBLIQUE_AXIS_RATIO = 0.92  # b/a below this: about 23 degrees off-axis
 MIN_SPAN = np.radians(60.0)
 MAX_SPAN = np.radians(350.0)
 
@@ -132,7 +133,10 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     if rms > max_rms_fraction * ellipse.a:
         return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
     centre = ellipse.center
-    if len(keypoints.pivot):
+    # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame
+    # through the pivot reads angles right; but a pixel of pivot error costs ~1 degree on a small
+    # dial, so the pivot is used only when the view is oblique enough for perspective to matter.
+    if len(keypoints.pivot) and ellipse.b / ellipse.a < OBLIQUE_AXIS_RATIO:
         pivot = keypoints.pivot.points[0]
         if np.hypot(pivot[0] - ellipse.cx, pivot[1] - ellipse.cy) < 0.25 * ellipse.b:
             centre = (float(pivot[0]), float(pivot[1]))
