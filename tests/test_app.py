@@ -135,7 +135,7 @@ def test_daemon_replay_is_deterministic(tmp_path):
 
 
 def test_daemon_over_zenoh_publishes_readings_and_answers_queries(tmp_path):
-    from tests.sources.conftest import free_port, peer_config
+    from tests.zenoh_loopback import free_port, peer_config
 
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     text = CONFIG.format(path="unused.mcap", out=tmp_path / "out", state=tmp_path / "state")

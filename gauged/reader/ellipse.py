@@ -96,11 +96,21 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[El
     return ellipse, keep
 
 
-def _ends_from_gap(angles: np.ndarray) -> tuple[float, float]:
-    """Start and end angles around the largest clockwise gap between sorted notch angles."""
+GAP_CLEARLY_LARGER = 1.4  # the scale's gap must exceed the notch spacing by this factor to be recognised
+
+
+def _ends_from_gap(angles: np.ndarray) -> tuple[float, float] | None:
+    """Start and end angles around the largest clockwise gap between sorted notch angles.
+
+    None when that gap is not clearly larger than the spacing of the notches: on a dial whose gap is
+    about one notch step wide, every gap looks alike and guessing would put the scale anywhere.
+    """
     order = np.sort(np.mod(angles, 2 * np.pi))
     gaps = np.diff(np.concatenate([order, order[:1] + 2 * np.pi]))
     k = int(np.argmax(gaps))
+    others = np.delete(gaps, k)
+    if len(others) and gaps[k] < GAP_CLEARLY_LARGER * float(np.median(others)):
+        return None
     end, start = order[k], order[(k + 1) % len(order)]
     return float(start), float(end)
 
@@ -144,7 +154,11 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     if inferred:
         if inliers.sum() < 4:  # with three notches any of the three gaps could be the scale's
             return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and too few notches to infer them")
-        gap_start, gap_end = _ends_from_gap(dial_angle(ellipse, points[inliers], centre))
+        ends = _ends_from_gap(dial_angle(ellipse, points[inliers], centre))
+        if ends is None:
+            return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and no gap between the notches "
+                                "stands out as the scale's")
+        gap_start, gap_end = ends
     start = (float(dial_angle(ellipse, keypoints.start.points[:1], centre)[0]) if len(keypoints.start) else gap_start)
     end = (float(dial_angle(ellipse, keypoints.end.points[:1], centre)[0]) if len(keypoints.end) else gap_end)
     span = scale_span(start, end)

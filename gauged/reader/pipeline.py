@@ -119,18 +119,9 @@ class GaugeReader:
         """Read the gauge inside ``box`` (frame pixels) of (H, W, 3) uint8 BGR ``image``."""
         result = GaugeRead(box=box, score=score)
         timer = _Timer(result.seconds)
-        with timer("crop"):
-            crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
-        if isinstance(crop, StageFailure):
-            result.failure = crop
+        if not self._crop_and_keypoints(image, box, result, timer, require_notches=True):
             return result
-        result.crop = crop
-        with timer("keypoints"):
-            keypoints = decode_crop_maps(self.crop_model(to_model_input(crop.image)), self.crop_size)
-        if isinstance(keypoints, StageFailure):
-            result.failure = keypoints
-            return result
-        result.keypoints = keypoints
+        crop, keypoints = result.crop, result.keypoints
         with timer("ellipse"):
             arc = fit_scale_arc(keypoints, self.crop_size)
         if isinstance(arc, StageFailure):
@@ -164,16 +155,9 @@ class GaugeReader:
         """
         result = GaugeRead(box=box, score=1.0, arc=arc, scales=[scale], unit=scale.unit)
         timer = _Timer(result.seconds)
-        with timer("crop"):
-            crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
-        if isinstance(crop, StageFailure):
-            result.failure = crop
+        if not self._crop_and_keypoints(image, box, result, timer, require_notches=False):
             return result
-        result.crop = crop
-        with timer("keypoints"):
-            keypoints = decode_crop_maps(self.crop_model(to_model_input(crop.image)), self.crop_size,
-                                         require_notches=False)
-        result.keypoints = keypoints
+        keypoints = result.keypoints
         with timer("needle"):
             needle = fit_needle(keypoints.needle_prob, keypoints.stride, arc)
         if isinstance(needle, StageFailure):
@@ -187,6 +171,24 @@ class GaugeReader:
         else:
             result.value = value
         return result
+
+    def _crop_and_keypoints(self, image: np.ndarray, box: Box, result: GaugeRead, timer: _Timer,
+                            require_notches: bool) -> bool:
+        """Crop and run the crop model into ``result``; False (with ``result.failure`` set) on failure."""
+        with timer("crop"):
+            crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
+        if isinstance(crop, StageFailure):
+            result.failure = crop
+            return False
+        result.crop = crop
+        with timer("keypoints"):
+            logits = self.crop_model(to_model_input(crop.image))
+            keypoints = decode_crop_maps(logits, self.crop_size, require_notches=require_notches)
+        if isinstance(keypoints, StageFailure):
+            result.failure = keypoints
+            return False
+        result.keypoints = keypoints
+        return True
 
     def _scales(self, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, known: KnownScale | None,
                 primary_unit: str | None, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | StageFailure:

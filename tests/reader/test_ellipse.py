@@ -91,3 +91,11 @@ def test_fit_scale_arc_numbers_in_the_gap_refute_inferred_ends():
     failure = fit_scale_arc(replace(keypoints, numbers=peaks), CROP)
     assert not failure and failure.reason == "numbers_outside_scale"
     assert fit_scale_arc(keypoints, CROP)  # without the numbers the false gap is accepted
+
+
+def test_fit_scale_arc_refuses_to_guess_ends_when_no_gap_stands_out():
+    # 330 degrees in 8 steps of 41.25 degrees leaves a 30 degree gap: smaller than a step.
+    dial = Dial(start_deg=105, span_deg=330, majors=9)
+    failure = fit_scale_arc(keypoints_for(dial, start=False, end=False), CROP)
+    assert not failure and failure.reason == "no_scale_ends"
+    assert fit_scale_arc(keypoints_for(dial), CROP)  # with the end notches found it is read

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import base64
 import json
-import socket
-import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,8 +17,7 @@ from mcap.writer import CompressionType, Writer
 from mcap_ros2._dynamic import serialize_dynamic
 from mcap_ros2.writer import Writer as Ros2Writer
 
-from gauged.config.model import ZenohConfig
-from gauged.sources.zenoh_session import open_session
+from tests.zenoh_loopback import free_port, peer_config, zenoh_pair_sessions  # noqa: F401 (re-exported)
 
 TIME_MSG = "================================================================================\n" \
     "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" \
@@ -163,33 +160,11 @@ def cdr() -> CdrEncoders:
                        serialize_dynamic(raw, ROS_IMAGE_DEF)[raw])
 
 
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
-def peer_config(connect: str) -> zenoh.Config:
-    conf = zenoh.Config()
-    conf.insert_json5("mode", '"peer"')
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    conf.insert_json5("listen/endpoints", "[]")
-    conf.insert_json5("connect/endpoints", json.dumps([connect]))
-    return conf
 
 
 @pytest.fixture
 def zenoh_pair() -> Iterator[tuple[zenoh.Session, zenoh.Session]]:
     """(daemon session listening on loopback, peer session connected to it); both closed after."""
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    daemon = open_session(ZenohConfig(mode="peer", listen=[endpoint], multicast_scouting=False))
-    peer = zenoh.open(peer_config(endpoint))
-    try:
-        deadline = time.monotonic() + 5
-        while not peer.info.peers_zid() and time.monotonic() < deadline:
-            time.sleep(0.02)
-        assert peer.info.peers_zid(), "peer session did not connect on loopback"
-        yield daemon, peer
-    finally:
-        peer.close()
-        daemon.close()
+    yield from zenoh_pair_sessions()

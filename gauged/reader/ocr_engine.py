@@ -1,0 +1,258 @@
+"""Text detection and recognition with the PP-OCR ONNX models that ship inside an OCR wheel.
+
+The models are the PaddleOCR networks packaged by RapidOCR: a DB text detector (a per-pixel text
+probability map) and an SVTR/CRNN recogniser (per-column character probabilities decoded by CTC).
+Only the ``.onnx`` files are used, read from the installed package's folder *without importing the
+package* (its ``__init__`` pulls in its own logging, YAML and polygon libraries, and the RapidOCR 3
+package can download models). So nothing here reads the network, and the wrapper's dependencies are
+onnxruntime, OpenCV and numpy.
+
+The recogniser's alphabet is PaddleOCR's Chinese+English dictionary (6,623 symbols for PP-OCRv4);
+gauges print digits, Latin letters and a few symbols, so CTC decoding is restricted to those
+(:data:`TEXT_CHARS`), and a second decoding restricted to :data:`NUMBER_CHARS` gives the best
+numeric reading of the same columns. Restricting the alphabet removes confusions with look-alike
+CJK glyphs at no cost.
+
+References: Liao et al., "Real-time Scene Text Detection with Differentiable Binarization", AAAI
+2020 (post-processing: threshold, minimum-area rectangle, unclip by ``area * ratio / perimeter``);
+Graves et al., "Connectionist Temporal Classification", ICML 2006 (greedy decoding).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+# Model files inside each supported wheel (install the first with ``pip install --no-deps``).
+MODEL_SETS: dict[str, tuple[str, str]] = {
+    "rapidocr_onnxruntime": ("models/ch_PP-OCRv4_det_infer.onnx", "models/ch_PP-OCRv4_rec_infer.onnx"),
+    "rapidocr": ("models/PP-OCRv6_det_small.onnx", "models/PP-OCRv6_rec_small.onnx"),
+}
+DEFAULT_MODEL_PACKAGE = "rapidocr_onnxruntime"
+
+TEXT_CHARS = frozenset(
+    "0123456789abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+    ".,-+/%()°℃℉²−—~:x×* "
+)
+NUMBER_CHARS = frozenset("0123456789.,-−")
+
+REC_HEIGHT = 48
+REC_MIN_WIDTH = 320  # PaddleOCR pads every line to at least 48 x 320; the model was trained so
+REC_BATCH = 8
+
+
+class OcrUnavailable(RuntimeError):
+    """The OCR models are not installed (an installation error, not an algorithmic failure)."""
+
+
+@dataclass(frozen=True, slots=True)
+class TextQuad:
+    """A detected text region: ``quad`` (4, 2) float32 corners in pixel (x, y), clockwise from the
+    top-left as the detector orders them, and the detector's mean text probability inside it."""
+
+    quad: np.ndarray
+    score: float
+
+
+@dataclass(frozen=True, slots=True)
+class Recognition:
+    """The recogniser's reading of one line image.
+
+    ``text``/``score`` decode with :data:`TEXT_CHARS`; ``digits``/``digits_score`` decode the same
+    network output restricted to :data:`NUMBER_CHARS`. Scores are the mean probability of the kept
+    characters (0 for an empty string).
+    """
+
+    text: str
+    score: float
+    digits: str
+    digits_score: float
+
+
+def find_model_files(package: str = DEFAULT_MODEL_PACKAGE) -> tuple[Path, Path]:
+    """Paths of the (detector, recogniser) ONNX files shipped in ``package``'s wheel.
+
+    The package is located with :func:`importlib.util.find_spec` and never imported. Raises
+    :class:`OcrUnavailable` when the package or its model files are missing.
+    """
+    if package not in MODEL_SETS:
+        raise ValueError(f"unknown OCR model package {package!r}; known: {sorted(MODEL_SETS)}")
+    spec = importlib.util.find_spec(package)
+    if spec is None or not spec.submodule_search_locations:
+        raise OcrUnavailable(f"OCR package {package!r} is not installed")
+    root = Path(next(iter(spec.submodule_search_locations)))
+    det, rec = (root / p for p in MODEL_SETS[package])
+    for path in (det, rec):
+        if not path.is_file():
+            raise OcrUnavailable(f"OCR model file missing: {path}")
+    return det, rec
+
+
+def _session(path: Path, threads: int):
+    import onnxruntime as ort
+
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = threads
+    opts.inter_op_num_threads = 1
+    opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+    opts.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    opts.log_severity_level = 3
+    return ort.InferenceSession(str(path), sess_options=opts, providers=["CPUExecutionProvider"])
+
+
+def _normalise(image_bgr: np.ndarray) -> np.ndarray:
+    """uint8 (H, W, 3) BGR -> float32 (3, H, W) in [-1, 1], the PP-OCR input convention."""
+    return (image_bgr.astype(np.float32) * (2.0 / 255.0) - 1.0).transpose(2, 0, 1)
+
+
+class OcrEngine:
+    """The detector and recogniser sessions, created once and reused (not thread-safe to share
+    across threads that change ``threads``; one engine per worker is the intended use).
+
+    ``threads`` is onnxruntime's intra-op thread count. ``package`` picks the model set
+    (:data:`MODEL_SETS`).
+    """
+
+    def __init__(self, threads: int = 2, package: str = DEFAULT_MODEL_PACKAGE) -> None:
+        if threads < 1:
+            raise ValueError("threads must be >= 1")
+        det_path, rec_path = find_model_files(package)
+        self.package = package
+        self.threads = threads
+        self._det = _session(det_path, threads)
+        self._rec = _session(rec_path, threads)
+        meta = self._rec.get_modelmeta().custom_metadata_map
+        if "character" not in meta:
+            raise OcrUnavailable(f"recogniser {rec_path} has no embedded character list")
+        # CTC classes: 0 = blank, 1..n = dictionary, n + 1 = space (PaddleOCR's layout).
+        self._chars = ["", *meta["character"].splitlines(), " "]
+        self._text_idx = self._class_subset(TEXT_CHARS)
+        self._digit_idx = self._class_subset(NUMBER_CHARS)
+
+    def _class_subset(self, chars: frozenset[str]) -> np.ndarray:
+        return np.array([0] + [i for i, c in enumerate(self._chars) if i and c in chars], dtype=np.int64)
+
+    # -- detection ---------------------------------------------------------------------------
+    def detect(
+        self,
+        image_bgr: np.ndarray,
+        max_side: int = 640,
+        thresh: float = 0.3,
+        box_thresh: float = 0.5,
+        unclip_ratio: float = 1.6,
+    ) -> list[TextQuad]:
+        """Text regions in a (H, W, 3) uint8 BGR image, scaled so its longer side is ``max_side``
+        (rounded to a multiple of 32) for the network; quads are in the input image's pixels."""
+        h, w = image_bgr.shape[:2]
+        scale = max_side / max(h, w)
+        nh, nw = max(32, round(h * scale / 32) * 32), max(32, round(w * scale / 32) * 32)
+        inp = cv2.resize(image_bgr, (nw, nh), interpolation=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR)
+        prob = self._det.run(None, {self._det.get_inputs()[0].name: _normalise(inp)[None]})[0][0, 0]
+        return db_boxes(prob, (w / nw, h / nh), thresh, box_thresh, unclip_ratio)
+
+    # -- recognition -------------------------------------------------------------------------
+    def recognize(self, lines: Sequence[np.ndarray]) -> list[Recognition]:
+        """Read each (h, w, 3) uint8 BGR line image (text left to right, upright)."""
+        out: list[Recognition | None] = [None] * len(lines)
+        order = sorted(range(len(lines)), key=lambda i: lines[i].shape[1] / max(1, lines[i].shape[0]))
+        for start in range(0, len(order), REC_BATCH):
+            idx = order[start : start + REC_BATCH]
+            widths = [max(1, math.ceil(REC_HEIGHT * lines[i].shape[1] / max(1, lines[i].shape[0]))) for i in idx]
+            batch_w = max(REC_MIN_WIDTH, *widths)
+            batch = np.zeros((len(idx), 3, REC_HEIGHT, batch_w), np.float32)
+            for k, (i, rw) in enumerate(zip(idx, widths)):
+                line = cv2.resize(lines[i], (rw, REC_HEIGHT), interpolation=cv2.INTER_LINEAR)
+                batch[k, :, :, :rw] = _normalise(line)
+            probs = self._rec.run(None, {self._rec.get_inputs()[0].name: batch})[0]
+            for k, i in enumerate(idx):
+                text, score = ctc_greedy(probs[k], self._text_idx, self._chars)
+                digits, dscore = ctc_greedy(probs[k], self._digit_idx, self._chars)
+                out[i] = Recognition(text.strip(), score, digits, dscore)
+        return [r for r in out if r is not None]
+
+
+def ctc_greedy(probs: np.ndarray, classes: np.ndarray, chars: Sequence[str]) -> tuple[str, float]:
+    """Greedy CTC decoding of ``probs`` (T, C) restricted to the class indices ``classes`` (index 0
+    of ``classes`` must be the blank): best class per column, repeats merged, blanks dropped.
+    Returns the text and the mean probability of its characters (0.0 when empty)."""
+    sub = probs[:, classes]
+    best = sub.argmax(axis=1)
+    keep = best != 0
+    keep[1:] &= best[1:] != best[:-1]
+    if not keep.any():
+        return "", 0.0
+    cls = classes[best[keep]]
+    return "".join(chars[c] for c in cls), float(sub[np.nonzero(keep)[0], best[keep]].mean())
+
+
+def db_boxes(
+    prob: np.ndarray,
+    to_input: tuple[float, float],
+    thresh: float = 0.3,
+    box_thresh: float = 0.5,
+    unclip_ratio: float = 1.6,
+    min_side: float = 3.0,
+) -> list[TextQuad]:
+    """DB post-processing of a (h, w) float text-probability map into rotated quads.
+
+    Each connected region of ``prob > thresh`` becomes its minimum-area rectangle; rectangles whose
+    mean probability is below ``box_thresh`` are dropped, the rest grown on every side by
+    ``area * unclip_ratio / perimeter`` (the DB paper's unclip; for a rectangle the exact offset
+    polygon's bounding rectangle) and scaled by ``to_input = (sx, sy)`` to input pixels.
+    """
+    mask = cv2.dilate((prob > thresh).astype(np.uint8), np.ones((2, 2), np.uint8))
+    contours, _ = cv2.findContours(mask, cv2.RETR_LIST, cv2.CHAIN_APPROX_SIMPLE)
+    sx, sy = to_input
+    out = []
+    for contour in contours[:1000]:
+        (cx, cy), (rw, rh), angle = cv2.minAreaRect(contour)
+        if min(rw, rh) < min_side:
+            continue
+        pts = cv2.boxPoints(((cx, cy), (rw, rh), angle))
+        score = _mean_in_polygon(prob, pts)
+        if score < box_thresh:
+            continue
+        d = rw * rh * unclip_ratio / (2.0 * (rw + rh))
+        if min(rw, rh) + 2 * d < min_side + 2:
+            continue
+        pts = cv2.boxPoints(((cx, cy), (rw + 2 * d, rh + 2 * d), angle))
+        pts = order_quad(pts) * np.array([sx, sy], np.float32)
+        out.append(TextQuad(pts.astype(np.float32), float(score)))
+    return out
+
+
+def _mean_in_polygon(prob: np.ndarray, pts: np.ndarray) -> float:
+    h, w = prob.shape
+    x0, y0 = np.clip(np.floor(pts.min(0)).astype(int), 0, [w - 1, h - 1])
+    x1, y1 = np.clip(np.ceil(pts.max(0)).astype(int), 0, [w - 1, h - 1])
+    m = np.zeros((y1 - y0 + 1, x1 - x0 + 1), np.uint8)
+    cv2.fillPoly(m, [np.round(pts - [x0, y0]).astype(np.int32)], 1)
+    return float(cv2.mean(prob[y0 : y1 + 1, x0 : x1 + 1], m)[0])
+
+
+def order_quad(pts: np.ndarray) -> np.ndarray:
+    """Order 4 corners as top-left, top-right, bottom-right, bottom-left (y down), reading the
+    quad's longer-or-equal horizontal-ish side as its top: the ordering the recogniser crop uses."""
+    pts = np.asarray(pts, np.float32)
+    xs = pts[np.argsort(pts[:, 0], kind="stable")]
+    left, right = xs[:2], xs[2:]
+    tl, bl = left[np.argsort(left[:, 1], kind="stable")]
+    tr, br = right[np.argsort(right[:, 1], kind="stable")]
+    return np.stack([tl, tr, br, bl])
+
+
+def crop_quad(image_bgr: np.ndarray, quad: np.ndarray) -> np.ndarray:
+    """The quad's content warped to an axis-aligned (h, w, 3) image, ``quad[0]`` -> top-left."""
+    quad = np.asarray(quad, np.float32)
+    w = int(round(max(np.linalg.norm(quad[0] - quad[1]), np.linalg.norm(quad[3] - quad[2]))))
+    h = int(round(max(np.linalg.norm(quad[0] - quad[3]), np.linalg.norm(quad[1] - quad[2]))))
+    w, h = max(w, 2), max(h, 2)
+    dst = np.array([[0, 0], [w, 0], [w, h], [0, h]], np.float32)
+    m = cv2.getPerspectiveTransform(quad, dst)
+    return cv2.warpPerspective(image_bgr, m, (w, h), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
