@@ -199,3 +199,36 @@ def test_batch_config_keeps_topics_and_disables_network_outputs(tmp_path, bad):
     batch = batch_config(config, tmp_path / "r.mcap", tmp_path / "o")
     assert batch.cameras[0].source.path == tmp_path / "r.mcap" and batch.cameras[0].source.topic == "/cam1/image"
     assert not batch.outputs.zenoh.enabled and not batch.outputs.prometheus.enabled and batch.outputs.mcap.enabled
+
+
+def test_daemon_alarm_ack_over_zenoh_is_applied_and_recorded(tmp_path):
+    from tests.zenoh_loopback import free_port, peer_config
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    recording = tmp_path / "in.mcap"
+    write_recording(recording, [9.5] * 10, base_ns=time.time_ns() - 10**9)
+    text = CONFIG.format(path=recording, out=tmp_path / "out", state=tmp_path / "state")
+    text = text.replace("zenoh: {enabled: false}", "zenoh: {prefix: gauged/ack}")
+    text += f"zenoh: {{mode: peer, listen: ['{endpoint}'], multicast_scouting: false}}\nnode: edge1\n"
+    daemon = Daemon(parse_config(text), reader_factory=lambda c: BrightnessReader())
+    daemon.start()
+    peer = zenoh.open(peer_config(endpoint))
+    try:
+        assert daemon.wait(timeout=30)
+        deadline = time.monotonic() + 10
+        while not peer.info.peers_zid() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        status = {s.level: s for s in daemon.runners["g1"].tracker.alarm_status()}
+        assert status["high"].state.value == "active_unacknowledged"
+        payload = json.dumps({"level": "high", "who": "operator-7", "why": "seen, valve opened"})
+        replies = [r.ok for r in peer.get("gauged/ack/g1/alarm/ack", payload=payload, timeout=5) if r.ok]
+        assert replies and json.loads(replies[0].payload.to_bytes())["ok"] is True
+        status = {s.level: s for s in daemon.runners["g1"].tracker.alarm_status()}
+        assert status["high"].state.value == "active_acknowledged"
+    finally:
+        daemon.stop()
+        peer.close()
+    (file,) = sorted((tmp_path / "out").glob("*.mcap"))
+    alarms = read_messages(file)["/gauged/alarms"]
+    acked = [a for a in alarms if a["state"] == "active_acknowledged"]
+    assert acked and acked[0]["who"] == "operator-7" and acked[0]["why"] == "seen, valve opened"
