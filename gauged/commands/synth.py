@@ -1,9 +1,17 @@
-"""``gauged synth``: make synthetic data — labelled gauge images, recordings, a contact sheet."""
+"""``gauged synth``: render synthetic gauges with complete ground truth.
+
+    gauged synth images --count N --seed S --out DIR [--kind scene|crop] [--masks] [--workers W]
+    gauged synth recording --seconds T --fps F --gauges K --seed S --out FILE.mcap [--ros2]
+    gauged synth sheet --out sheet.png [--seed S]
+    gauged synth demo --out recordings/demo.mcap [--ros2]
+    gauged synth plant-demo --out recordings/plant-demo.mcap [--ros2-out FILE.mcap]
+
+The ground-truth schema is documented in ``gauged/synth/truth.py`` and ``docs/synth.md``.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 from pathlib import Path
 
@@ -12,89 +20,172 @@ import numpy as np
 
 log = logging.getLogger(__name__)
 
-DEMO = {"seconds": 60.0, "fps": 2.0, "seed": 7}
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def _quality(text: str) -> int:
+    value = int(text)
+    if not 1 <= value <= 100:
+        raise argparse.ArgumentTypeError(f"JPEG quality must be 1-100, got {text}")
+    return value
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("synth", help="render synthetic gauges, recordings and contact sheets",
-                                   description="Procedural gauges with complete labels; everything is a function of "
-                                   "--seed, so the same command writes byte-identical files.")
-    sub = parser.add_subparsers(dest="what", metavar="WHAT", required=True)
-    images = sub.add_parser("images", help="labelled gauge crops: DIR/images/*.png and DIR/labels.jsonl",
-                            epilog="example: gauged synth images --count 1000 --seed 9000000 --out /tmp/synth-eval")
-    images.add_argument("--count", type=int, required=True)
-    images.add_argument("--seed", type=int, default=0, help="first seed; image i uses seed + i")
-    images.add_argument("--size", type=int, default=448, help="crop side in pixels (default 448)")
-    images.add_argument("--out", type=Path, required=True)
-    images.set_defaults(func=run_images)
-    recording = sub.add_parser("recording", help="an MCAP recording of K dials whose needles move",
-                               epilog="example: gauged synth recording --seconds 20 --fps 5 --gauges 2 --seed 1 --out /tmp/r.mcap")
-    recording.add_argument("--seconds", type=float, default=60.0)
-    recording.add_argument("--fps", type=float, default=2.0)
-    recording.add_argument("--gauges", type=int, default=4, help="number of dials (1-4, the demo's dials in order)")
-    recording.add_argument("--seed", type=int, default=DEMO["seed"])
-    recording.add_argument("--ros2", action="store_true", help="images as ROS 2 sensor_msgs/msg/CompressedImage (cdr)")
-    recording.add_argument("--out", type=Path, required=True)
-    recording.set_defaults(func=run_recording)
-    demo = sub.add_parser("demo", help="regenerate recordings/demo.mcap exactly",
-                          description=f"The bundled demo: 4 dials, {DEMO['seconds']:g} s at {DEMO['fps']:g} fps, seed "
-                          f"{DEMO['seed']}. Same as: gauged synth recording --seconds {DEMO['seconds']:g} --fps "
-                          f"{DEMO['fps']:g} --gauges 4 --seed {DEMO['seed']} --out recordings/demo.mcap")
-    demo.add_argument("--out", type=Path, default=Path("recordings/demo.mcap"))
-    demo.add_argument("--ros2", action="store_true")
-    demo.set_defaults(func=run_demo)
-    sheet = sub.add_parser("sheet", help="a contact sheet of 48 random renders")
-    sheet.add_argument("--out", type=Path, default=Path("sheet.png"))
-    sheet.add_argument("--seed", type=int, default=0)
-    sheet.set_defaults(func=run_sheet)
+    parser = subparsers.add_parser(
+        "synth", help="render synthetic gauges, recordings and contact sheets with ground truth",
+        description="Render synthetic analog gauges with complete ground truth (see docs/synth.md).")
+    sub = parser.add_subparsers(dest="synth_command", metavar="{images,recording,sheet,demo,plant-demo}")
+    sub.required = True
+
+    images = sub.add_parser("images", help="write rendered images and labels.jsonl",
+                            description="Write N renders as DIR/NNNNNN.jpg and their ground truth as DIR/labels.jsonl.")
+    images.add_argument("--count", type=_positive_int, required=True, help="number of images")
+    images.add_argument("--seed", type=int, default=0, help="seed of the batch (image i uses seed [S, i])")
+    images.add_argument("--out", type=Path, required=True, help="output directory")
+    images.add_argument("--kind", choices=("scene", "crop"), default="scene",
+                        help="scene: full frames with several gauges; crop: square crops of one gauge")
+    images.add_argument("--width", type=_positive_int, default=1280, help="scene width in px")
+    images.add_argument("--height", type=_positive_int, default=720, help="scene height in px")
+    images.add_argument("--size", type=_positive_int, default=448, help="crop side in px")
+    images.add_argument("--masks", action="store_true", help="also write needle label maps DIR/masks/NNNNNN.png (crops)")
+    images.add_argument("--clean", action="store_true", help="no glass, shadows, blur, noise or compression")
+    images.add_argument("--quality", type=_quality, default=95, help="JPEG quality of the written files")
+    images.add_argument("--workers", type=_positive_int, default=1, help="worker processes")
+
+    rec = sub.add_parser("recording", help="write a moving scene as an MCAP recording",
+                         description="Render one camera looking at K gauges whose values move, as MCAP "
+                                     "(foxglove.CompressedImage JSON, or ROS 2 CDR with --ros2), with the truth on /<camera>/truth.")
+    rec.add_argument("--seconds", type=_positive_float, default=60.0, help="duration in seconds")
+    rec.add_argument("--fps", type=_positive_float, default=2.0, help="frames per second")
+    rec.add_argument("--gauges", type=_positive_int, default=3, help="number of gauges in view")
+    rec.add_argument("--seed", type=int, default=0, help="seed of the scene and its timelines")
+    rec.add_argument("--out", type=Path, required=True, help="output .mcap file")
+    rec.add_argument("--ros2", action="store_true", help="write sensor_msgs/msg/CompressedImage (ros2msg + cdr)")
+    rec.add_argument("--camera", default="cam1", help="camera id (topics /<camera>/image and /<camera>/truth)")
+    rec.add_argument("--width", type=_positive_int, default=960, help="frame width in px")
+    rec.add_argument("--height", type=_positive_int, default=540, help="frame height in px")
+    rec.add_argument("--quality", type=_quality, default=80, help="JPEG quality of the frames")
+
+    sheet = sub.add_parser("sheet", help="write a contact sheet of 48 random renders",
+                           description="Write a PNG grid of random renders (crops, every sixth a full scene).")
+    sheet.add_argument("--out", type=Path, required=True, help="output image (.png)")
+    sheet.add_argument("--seed", type=int, default=0, help="seed")
+    sheet.add_argument("--count", type=_positive_int, default=48, help="number of tiles")
+    sheet.add_argument("--tile", type=_positive_int, default=256, help="tile side in px")
+    sheet.add_argument("--workers", type=_positive_int, default=1, help="worker processes")
+
+    demo = sub.add_parser("demo", help="rebuild the bundled demo recording (four moving dials, one camera)",
+                          description="Rebuild recordings/demo.mcap byte for byte (gauged.synth.moving_dials; "
+                                      "see recordings/README.md).")
+    demo.add_argument("--out", type=Path, default=Path("recordings/demo.mcap"), help="output .mcap file")
+    demo.add_argument("--ros2", action="store_true", help="write sensor_msgs/msg/CompressedImage (ros2msg + cdr)")
+
+    plant = sub.add_parser("plant-demo", help="rebuild the plant demo recording (two cameras, five gauges)",
+                           description="Rebuild recordings/plant-demo.mcap byte for byte with the full renderer "
+                                       "(gauged.synth.demo; see recordings/README.md).")
+    plant.add_argument("--out", type=Path, default=Path("recordings/plant-demo.mcap"), help="output .mcap file")
+    plant.add_argument("--ros2-out", type=Path, default=None, help="also write the ROS 2 flavour to this file")
+    parser.set_defaults(func=run)
 
 
-def run_images(args: argparse.Namespace) -> int:
-    from gauged.training.dial_renderer import render_crop
+def _parent_ok(path: Path) -> bool:
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        log.error("directory %s does not exist", parent)
+        return False
+    return True
 
-    (args.out / "images").mkdir(parents=True, exist_ok=True)
-    with (args.out / "labels.jsonl").open("w") as labels:
-        for i in range(args.count):
-            seed = args.seed + i
-            image, truth = render_crop(seed, args.size)
-            name = f"{seed:08d}.png"
-            cv2.imwrite(str(args.out / "images" / name), image)
-            labels.write(json.dumps({
-                "image": name, "reading": truth.value, "min": truth.min_value, "max": truth.max_value,
-                "unit": truth.unit, "box": truth.face_box,
-                "points": {k: np.round(v, 3).tolist() for k, v in truth.points.items()}}) + "\n")
-            if (i + 1) % 100 == 0 or i + 1 == args.count:
-                log.info("rendered %d/%d", i + 1, args.count)
-    print(args.out / "labels.jsonl")
+
+def _images(args: argparse.Namespace) -> int:
+    from gauged.synth.dataset import write_images
+
+    if args.out.exists() and not args.out.is_dir():
+        log.error("--out %s exists and is not a directory", args.out)
+        return 2
+    labels = write_images(args.out, args.kind, args.seed, args.count, width=args.width, height=args.height,
+                          size=args.size, clean=args.clean, workers=args.workers, quality=args.quality, masks=args.masks)
+    print(f"wrote {args.count} {args.kind} images and {labels}")
     return 0
 
 
-def _write(out: Path, gauges: int, seconds: float, fps: float, seed: int, ros2: bool) -> int:
+def _recording(args: argparse.Namespace) -> int:
+    from gauged.synth.recording import write_foxglove, write_ros2
+    from gauged.synth.sequence import random_sequence
+
+    if not _parent_ok(args.out):
+        return 2
+    seq = random_sequence(np.random.default_rng(args.seed), camera=args.camera, seconds=args.seconds, fps=args.fps,
+                          gauges=args.gauges, width=args.width, height=args.height)
+    meta = {"command": "gauged synth recording", "seed": str(args.seed), "seconds": f"{args.seconds:g}",
+            "fps": f"{args.fps:g}", "gauges": str(args.gauges)}
+    write = write_ros2 if args.ros2 else write_foxglove
+    summary = write(args.out, [seq], quality=args.quality, metadata=meta)
+    print(f"wrote {summary.frames} frames of {args.camera} to {summary.path} ({summary.bytes} bytes)")
+    return 0
+
+
+def _sheet(args: argparse.Namespace) -> int:
+    from gauged.synth.dataset import contact_sheet
+
+    if not _parent_ok(args.out):
+        return 2
+    img = contact_sheet(args.seed, args.count, args.tile, workers=args.workers)
+    if not cv2.imwrite(str(args.out), img):
+        log.error("could not write %s (unknown image extension?)", args.out)
+        return 2
+    print(f"wrote {args.out}")
+    return 0
+
+
+DIALS_DEMO = {"seconds": 60.0, "fps": 2.0, "seed": 7}
+
+
+def _dials_demo(args: argparse.Namespace) -> int:
     from gauged.synth.moving_dials import demo_dials, write_recording
 
-    dials = demo_dials()[: max(1, min(4, gauges))]
+    if not _parent_ok(args.out):
+        return 2
+    seconds, fps = DIALS_DEMO["seconds"], DIALS_DEMO["fps"]
     step = max(1, int(seconds * fps) // 10)
-    frames = write_recording(out, dials, seconds, fps, seed, ros2=ros2,
+    frames = write_recording(args.out, demo_dials(), seconds, fps, DIALS_DEMO["seed"], ros2=args.ros2,
                              progress=lambda i, n: i % step == 0 and log.info("frame %d/%d", i, n))
-    log.info("wrote %d frames of %d dial(s) to %s (%.1f MB)", frames, len(dials), out, out.stat().st_size / 2**20)
-    print(out)
+    print(f"wrote {frames} frames to {args.out} ({args.out.stat().st_size} bytes)")
     return 0
 
 
-def run_recording(args: argparse.Namespace) -> int:
-    return _write(args.out, args.gauges, args.seconds, args.fps, args.seed, args.ros2)
+def _plant_demo(args: argparse.Namespace) -> int:
+    from gauged.synth.demo import QUALITY, demo_sequences
+    from gauged.synth.recording import write_foxglove, write_ros2
 
-
-def run_demo(args: argparse.Namespace) -> int:
-    return _write(args.out, 4, DEMO["seconds"], DEMO["fps"], DEMO["seed"], args.ros2)
-
-
-def run_sheet(args: argparse.Namespace) -> int:
-    from gauged.training.dial_renderer import render_crop
-
-    tiles = [render_crop(args.seed + i, 192)[0] for i in range(48)]
-    rows = [np.hstack(tiles[r * 8:(r + 1) * 8]) for r in range(6)]
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(args.out), np.vstack(rows))
-    print(args.out)
+    for path in (args.out, args.ros2_out):
+        if path is not None and not _parent_ok(path):
+            return 2
+    meta = {"command": "gauged synth demo", "description": "gauged demo: 2 cameras, 5 gauges, 60 s"}
+    summary = write_foxglove(args.out, demo_sequences(), quality=QUALITY, metadata=meta)
+    print(f"wrote {summary.frames} frames to {summary.path} ({summary.bytes} bytes)")
+    if args.ros2_out is not None:
+        summary = write_ros2(args.ros2_out, demo_sequences(), quality=QUALITY, metadata=meta)
+        print(f"wrote {summary.frames} frames to {summary.path} ({summary.bytes} bytes)")
     return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    handlers = {"images": _images, "recording": _recording, "sheet": _sheet, "demo": _dials_demo,
+                "plant-demo": _plant_demo}
+    try:
+        return handlers[args.synth_command](args)
+    except OSError as exc:
+        log.error("synth %s failed: %s", args.synth_command, exc)
+        return 1

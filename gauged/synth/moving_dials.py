@@ -149,7 +149,8 @@ uint32 nanosec"""
 
 
 def write_recording(out: Path, dials: list[DialSpec], seconds: float, fps: float, seed: int, camera: str = "cam1",
-                    ros2: bool = False, jpeg_quality: int = 70, progress: Callable[[int, int], None] | None = None) -> int:
+                    ros2: bool = False, jpeg_quality: int = 70, progress: Callable[[int, int], None] | None = None,
+                    width: int = 960, height: int = 540) -> int:
     """Write the sequence to ``out``; returns the number of frames."""
     from mcap.writer import CompressionType, Writer
 
@@ -172,7 +173,7 @@ def write_recording(out: Path, dials: list[DialSpec], seconds: float, fps: float
             image_channel = writer.register_channel(f"/{camera}/image", "json", image_schema)
         truth_schema = writer.register_schema("gauged.Truth", "jsonschema", b'{"type":"object"}')
         truth_channel = writer.register_channel(f"/{camera}/truth", "json", truth_schema)
-        for index, (stamp_ns, frame, truth) in enumerate(render_frames(dials, seconds, fps, seed)):
+        for index, (stamp_ns, frame, truth) in enumerate(render_frames(dials, seconds, fps, seed, width, height)):
             ok, jpeg = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality])
             sec, nsec = divmod(stamp_ns, NS_PER_S)
             if ros2:
