@@ -28,6 +28,7 @@ from gauged.camera_worker import CameraWorker
 from gauged.config.model import GaugedConfig
 from gauged.gauge_runner import GaugeOutput, GaugeRunner, Reader
 from gauged.metrics import Metrics
+from gauged.reader.failures import failure_pairs
 from gauged.sinks import BufferedSink, open_sinks
 from gauged.sources import make_source
 from gauged.tracking.state_file import restore_tracker, save_tracker
@@ -38,20 +39,6 @@ log = logging.getLogger(__name__)
 
 NS_PER_S = 1_000_000_000
 SAVE_EVERY_S = 30.0
-
-# Every (stage, reason) the reader can report, so failure counters exist at zero from the start.
-FAILURE_PAIRS: tuple[tuple[str, str], ...] = (
-    ("detect", "no_gauge"), ("detect", "gauge_not_found"), ("crop", "gauge_too_small"),
-    ("keypoints", "no_notches"),
-    *(("ellipse", r) for r in ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends",
-                               "implausible_span")),
-    *(("needle", r) for r in ("no_needle", "too_few_pixels", "degenerate_line", "needle_off_centre",
-                              "no_intersection", "intersection_behind")),
-    ("ocr", "ocr_unavailable"), ("ocr", "no_text"), ("ocr", "no_numbers"),
-    *(("scale", r) for r in ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers")),
-    ("reading", "needle_off_scale"), ("reading", "low_confidence"),
-)
-
 
 def default_reader(config: GaugedConfig) -> Reader:
     """The shipped reader: packaged ONNX models on onnxruntime, plus OCR when it is installed."""
@@ -156,7 +143,7 @@ class Daemon:
     def _open_sinks(self) -> None:
         self.sinks = open_sinks(
             self.config.outputs, metrics=self.metrics, session=self.session, node=self.node,
-            gauges=list(self.runners), failure_pairs=FAILURE_PAIRS, on_command=self._on_command,
+            gauges=list(self.runners), failure_pairs=failure_pairs(), on_command=self._on_command,
             alarm_state=self._alarm_state, name_prefix=self.config.site)
         for gauge in self.runners:
             self.metrics.scale_locked.labels(gauge=gauge).set(0)

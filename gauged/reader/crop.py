@@ -10,6 +10,7 @@ import numpy as np
 from gauged.types import Box, StageFailure
 
 STAGE = "crop"
+REASONS = ("gauge_too_small",)
 MIN_GAUGE_PX = 24  # below this a dial has too few pixels for notches and needle
 
 

@@ -19,6 +19,7 @@ from gauged.reader.onnx_model import OnnxModel, to_model_input
 from gauged.types import GaugeDetection, StageFailure
 
 STAGE = "detect"
+REASONS = ("no_gauge", "gauge_not_found")  # the second is the gauge runner's: no detection associated
 LETTERBOX_FILL = 114  # grey padding, as used in training
 
 

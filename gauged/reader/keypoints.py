@@ -18,6 +18,7 @@ import numpy as np
 from gauged.types import StageFailure
 
 STAGE = "keypoints"
+REASONS = ("no_notches",)
 CROP_CHANNELS = ("start", "end", "major", "tip", "pivot", "numbers", "needle")
 
 

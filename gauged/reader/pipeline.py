@@ -18,6 +18,7 @@ import numpy as np
 from gauged.reader.crop import Crop, crop_gauge
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.ellipse import ScaleArc, fit_scale_arc
+from gauged.reader.failures import OCR_UNAVAILABLE
 from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
 from gauged.reader.needle import NeedleReading, fit_needle
 from gauged.reader.onnx_model import OnnxModel, to_model_input
@@ -196,7 +197,7 @@ class GaugeReader:
             result.unit = known.unit
             return [scale_from_prior(arc, known.min_value, known.max_value, known.unit)]
         if self.ocr is None:
-            return StageFailure("ocr", "ocr_unavailable", "no OCR engine and no configured scale")
+            return StageFailure("ocr", OCR_UNAVAILABLE, "no OCR engine and no configured scale")
         with timer("ocr"):
             read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points)
         if isinstance(read, StageFailure):

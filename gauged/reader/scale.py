@@ -20,7 +20,7 @@ from gauged.reader.ellipse import ScaleArc
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
-REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "range_mismatch")
+REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers")
 
 
 def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: str | None) -> ScaleModel:
