@@ -2,9 +2,10 @@
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
-# The OCR engine: its wheel carries the PP-OCRv4 ONNX models; --no-deps keeps opencv-python (which
-# clashes with opencv-python-headless) out. Its real dependencies are in pyproject.toml.
-OCR_PACKAGE := rapidocr-onnxruntime==1.4.4
+# The OCR models: the rapidocr wheel carries the PP-OCRv6 detection and recognition ONNX files, which
+# gauged runs with its own onnxruntime code (gauged/reader/ocr_engine.py). --no-deps: none of the
+# package's Python dependencies (downloaders, config libraries) is used.
+OCR_PACKAGE := rapidocr==3.10.0
 # Re-install whenever pyproject.toml changes.
 RUN_STAMP  := $(VENV)/.installed-run
 TEST_STAMP := $(VENV)/.installed-test

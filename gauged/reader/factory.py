@@ -26,11 +26,12 @@ def build_reader(config: ReaderConfig) -> GaugeReader:
     except ModelNotAvailable as exc:
         log.warning("%s; gauges without an roi cannot be found, photos are read as one gauge", exc)
         detector = None
-    ocr = None
+    from gauged.reader.ocr import ScaleTextReader
+    from gauged.reader.ocr_engine import OcrUnavailable
+
     try:
-        from gauged.reader.ocr import ScaleTextReader
-    except ImportError as exc:  # OCR is optional when every gauge has a configured scale
-        log.warning("OCR is not available (%s): gauges without a configured scale cannot be read", exc)
-    else:
         ocr = ScaleTextReader(threads=config.threads)
+    except OcrUnavailable as exc:  # OCR is optional when every gauge has a configured scale
+        log.warning("OCR is not available (%s): gauges without a configured scale cannot be read", exc)
+        ocr = None
     return GaugeReader(crop, detector, ocr, config.min_confidence)

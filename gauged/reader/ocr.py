@@ -1,127 +1,347 @@
-"""OCR of scale numbers and unit on the crop warped so the scale is a circle with its gap at the bottom.
+"""OCR stage: the scale numbers and the unit of a dial, read on its rectified image.
 
-As in Reitsma et al. (Sec. 3.5), the crop is rectified first: the scale ellipse becomes a circle and
-the midpoint of the gap between the scale ends is turned to the bottom, so numbers printed upright on
-the dial are upright for the recogniser. The engine is RapidOCR (PP-OCRv4 detection + recognition as
-ONNX files inside the ``rapidocr-onnxruntime`` wheel: nothing is downloaded). Texts are kept as scale
-numbers only where numbers can be — in a ring around the scale circle — and mapped back to crop
-pixels; the RANSAC scale fit then keeps those consistent with a linear scale.
+As in Reitsma et al. ("Under pressure", Sec. 3.5) the crop is rectified first: the scale ellipse
+becomes a circle (centre ``cx, cy``, radius ``r``) and the gap between the scale's ends is turned to
+the bottom, so numbers printed upright are upright. What the pipeline knows is then used to read
+more than the paper's one pass did (it failed on 40-57% of images):
 
-Better than the paper's one pass: when the first pass finds fewer than three numbers, the rectified
-image is read again rotated by +-90 degrees (radially printed numbers), keeping what parses.
+- **ring**: text detection runs only on the square around the circle, and only texts whose centre
+  lies in the ring ``RING`` (in radii) count as scale numbers;
+- **orientation**: a text whose first reading does not parse is read again turned by 180 and +-90
+  degrees (radially printed numbers), in the order the circle makes likely; extra rotations run only
+  when the first attempt fails;
+- **hints**: predicted number centres from the crop model that no read number explains get a small
+  local detection around the point, or, when even that finds nothing (faint, tiny print), the ink
+  blob at the point is recognised;
+- **polar fallback**: when fewer than ``POLAR_BELOW`` numbers agree, the ring is unwrapped into a
+  strip, where radially printed numbers stand upright, and read too;
+- **parsing and filtering**: :mod:`gauged.reader.numbers` (split boxes merged, distractors refused,
+  the arithmetic progression of a linear scale kept) and :mod:`gauged.reader.units`.
+
+The engine (:class:`gauged.reader.ocr_engine.OcrEngine`) is created once per reader, with a fixed
+onnxruntime thread count, from model files inside the installed wheel; nothing is downloaded.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
 
 import cv2
 import numpy as np
 
 from gauged.geometry.rectify import rectifying_homography, unrectify_points, warp_rectified
 from gauged.reader.ellipse import ScaleArc
-from gauged.reader.numbers import parse_number, parse_unit
+from gauged.reader.numbers import filter_progression, merge_fragments, parse_number
+from gauged.reader.ocr_engine import DEFAULT_MODEL_PACKAGE, OcrEngine, TextBox, crop_quad
+from gauged.reader.ocr_regions import RING, ink_box, polar_strip
+from gauged.reader.units import match_unit, read_unit
 from gauged.types import ScaleMarker, StageFailure
 
 STAGE = "ocr"
 REASONS = ("no_text", "no_numbers")
-RECTIFIED_SIZE = 320
-RING = (0.45, 1.45)  # radii (in scale radii) where scale numbers are accepted
+RECTIFIED_SIZE = 512  # px; larger (the crop's own scale) or a larger detector input measured no better
+RECTIFIED_RADIUS = 0.34  # of RECTIFIED_SIZE: leaves room for numbers printed outside the scale
+TURNED_MIN_SCORE = 0.9  # a reading found only after turning the text must be this confident
+HINT_WINDOW = 0.6  # side of the local-detection window around a hint, in scale radii
+POLAR_BELOW = 4  # read the unwrapped ring too when the first pass gives fewer progression numbers
+
+Circle = tuple[float, float, float]
 
 
-@dataclass(frozen=True)
-class TextBox:
-    """One recognised text: its quad (4, 2) in the rectified image, text and recogniser score."""
+def _accepts(box: TextBox, min_score: float) -> bool:
+    """A reading worth keeping without trying other orientations: a number or a unit, confidently."""
+    return box.score >= min_score and (bool(parse_number(box.text)) or bool(match_unit(box.text)))
 
-    quad: np.ndarray
-    text: str
-    score: float
 
-    @property
-    def centre(self) -> np.ndarray:
-        return self.quad.mean(axis=0)
+def _maybe_turned(box: TextBox) -> bool:
+    """Could this text be printed turned (radially)? Its box is upright-tall or tilted over 30 deg.
+
+    Upright text on a rectified dial reads first time; words that do not parse are not re-read."""
+    u = np.asarray(box.quad[1] - box.quad[0], float)
+    tilt = abs(math.degrees(math.atan2(u[1], u[0])))
+    return box.height > 1.25 * box.width or 30.0 < tilt < 150.0
+
+
+def _turned(quad: np.ndarray, k: int) -> np.ndarray:
+    """The quad's corners relabelled for its crop turned ``k`` x 90 degrees clockwise."""
+    return np.roll(np.asarray(quad, np.float32), k, axis=0)
+
+
+def _up(quad: np.ndarray) -> np.ndarray:
+    q = np.asarray(quad, float)
+    v = (q[0] + q[1] - q[2] - q[3]) / 2.0
+    return v / max(float(np.linalg.norm(v)), 1e-9)
 
 
 class ScaleTextReader:
-    """RapidOCR, created once; ``read_markers`` is the pipeline's OCR stage."""
+    """Reads scale numbers and units; the pipeline's OCR stage is :meth:`read_markers`.
 
-    def __init__(self, threads: int = 2, min_score: float = 0.5):
-        from rapidocr_onnxruntime import RapidOCR  # imported here: optional for gauges with a known scale
+    ``threads`` is onnxruntime's intra-op thread count, ``models`` the wheel whose ONNX files are
+    used (:data:`gauged.reader.ocr_engine.MODEL_SETS`), ``min_score`` the recogniser score under
+    which a reading is tried in other orientations and, if still under, dropped. ``det_side`` is the
+    detector's input side in pixels for the ring around the circle.
+    """
 
-        self.engine = RapidOCR(intra_op_num_threads=threads, inter_op_num_threads=1)
+    def __init__(self, threads: int = 2, models: str = DEFAULT_MODEL_PACKAGE, min_score: float = 0.5,
+                 det_side: int = 512, use_hints: bool = True, progression: bool = True,
+                 polar_fallback: bool = True) -> None:
+        self.engine = OcrEngine(threads=threads, package=models)
         self.min_score = min_score
+        self.det_side = det_side
+        self.use_hints = use_hints
+        self.progression = progression
+        self.polar_fallback = polar_fallback
 
-    def read_text(self, image: np.ndarray) -> list[TextBox]:
-        """Every text RapidOCR finds in (H, W, 3) uint8 ``image``, with its quad in that image."""
-        result, _ = self.engine(image, use_cls=False)
-        boxes = []
-        for quad, text, score in result or []:
-            if float(score) >= self.min_score:
-                boxes.append(TextBox(np.asarray(quad, float) + 0.5, str(text), float(score)))  # to pixel-centre coords
-        return boxes
+    # -- reading text -------------------------------------------------------------------------
+    def read(self, image_bgr: np.ndarray, circle: Circle | None = None,
+             hints: np.ndarray | None = None) -> list[TextBox]:
+        """Every text read on (H, W, 3) uint8 BGR ``image_bgr``, quads in its pixel coordinates.
 
+        With ``circle = (cx, cy, r)`` (px) detection is limited to the square around the ring
+        :data:`RING` and texts whose centres fall outside the ring are dropped. ``hints`` (N, 2) px
+        are predicted number centres: each one no read number explains gets a local detection.
+        """
+        if image_bgr.ndim != 3 or image_bgr.shape[2] != 3:
+            raise ValueError(f"expected an (H, W, 3) BGR image, got shape {image_bgr.shape}")
+        x0 = y0 = 0
+        roi = image_bgr
+        if circle is not None:
+            cx, cy, r = circle
+            half = RING[1] * r
+            x0, y0 = max(0, int(cx - half)), max(0, int(cy - half))
+            roi = image_bgr[y0: int(math.ceil(cy + half)), x0: int(math.ceil(cx + half))]
+        boxes: list[TextBox] = []
+        if roi.size:
+            quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
+            boxes = self._recognise(image_bgr, quads, circle)
+        if circle is not None:
+            boxes = [b for b in boxes if _in_ring(b.center, circle) and not _tick_mark(b, circle)]
+        if hints is not None and len(hints) and circle is not None and self.use_hints:
+            boxes += self._read_hints(image_bgr, np.asarray(hints, float), boxes, circle)
+        return _split_spaced(_dedupe(boxes))
+
+    def _recognise(self, image: np.ndarray, quads: Sequence[np.ndarray], circle: Circle | None) -> list[TextBox]:
+        """Recognise each quad; re-read the ones that fail in the other orientations."""
+        if not quads:
+            return []
+        first = self.engine.recognize([crop_quad(image, q) for q in quads])
+        out = []
+        for quad, rec in zip(quads, first, strict=True):
+            best = TextBox(rec.text, rec.score, np.asarray(quad, np.float32), rec.digits, rec.digits_score)
+            if not _accepts(best, self.min_score) and _maybe_turned(best):
+                best = self._reorient(image, best, circle)
+            if best.text and best.score >= self.min_score:
+                out.append(best)
+        return out
+
+    def _reorient(self, image: np.ndarray, box: TextBox, circle: Circle | None) -> TextBox:
+        """Read ``box`` turned by 180 and +-90 degrees, the likeliest first; stop at an accepted one."""
+        order = [2, 1, 3]
+        if circle is not None:
+            c = np.array(box.center) - np.array(circle[:2])
+            outward = c / max(float(np.linalg.norm(c)), 1e-9)
+            ups = {k: _up(_turned(box.quad, k)) for k in order}
+            order.sort(key=lambda k: -max(float(ups[k] @ np.array([0.0, -1.0])), float(ups[k] @ outward)))
+        for k in order:
+            quad = _turned(box.quad, k)
+            rec = self.engine.recognize([crop_quad(image, quad)])[0]
+            cand = TextBox(rec.text, rec.score, quad, rec.digits, rec.digits_score)
+            if _accepts(cand, max(self.min_score, TURNED_MIN_SCORE)):
+                return cand
+        return box
+
+    def _read_hints(self, image: np.ndarray, hints: np.ndarray, found: list[TextBox], circle: Circle) -> list[TextBox]:
+        """Local detection around each hint that no read number explains."""
+        r = circle[2]
+        numbers = [b for b in found if parse_number(b.text)]
+        out: list[TextBox] = []
+        for hx, hy in hints:
+            if not _in_ring((hx, hy), circle):
+                continue
+            if any(_explains(b, (hx, hy), 0.12 * r) for b in numbers + out):
+                continue
+            half = 0.5 * HINT_WINDOW * r
+            x0, y0 = max(0, int(hx - half)), max(0, int(hy - half))
+            win = image[y0: int(hy + half) + 1, x0: int(hx + half) + 1]
+            if win.shape[0] < 8 or win.shape[1] < 8:
+                continue
+            side = int(min(320, max(160, 32 * round(max(win.shape[:2]) * 2 / 32))))
+            quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(win, max_side=side)]
+            quads = [q for q in quads if math.dist(q.mean(axis=0), (hx, hy)) < 0.25 * r]
+            if quads:
+                quad = min(quads, key=lambda q: math.dist(q.mean(axis=0), (hx, hy)))
+            else:  # faint or tiny print the detector misses: the ink around the point
+                box = ink_box(win, (hx - x0, hy - y0), r)
+                if box is None:
+                    continue
+                bx0, by0, bx1, by1 = box
+                quad = np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0])
+            got = self._recognise(image, [quad], circle)
+            out += [b for b in got if parse_number(b.text)]
+        return out
+
+    def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None) -> list[TextBox]:
+        """:meth:`read` on a rectified dial, plus :meth:`read_polar`'s numbers when the first pass
+        yields fewer than :data:`POLAR_BELOW` numbers of one progression (radially printed scales)."""
+        texts = self.read(image_bgr, circle, hints)
+        if self.polar_fallback and _progression_size(texts, circle) < POLAR_BELOW:
+            polar = [b for b in self.read_polar(image_bgr, circle) if parse_number(b.text)]
+            texts = _split_spaced(_dedupe(texts + polar))
+        return texts
+
+    def read_polar(self, image_bgr: np.ndarray, circle: Circle, gap_angle: float = math.pi / 2) -> list[TextBox]:
+        """Texts read on the ring :data:`RING` unwrapped into a strip, quads mapped back to the image.
+
+        The strip's columns run clockwise from ``gap_angle`` (so no scale number is cut at the seam)
+        and its rows inward from the outer radius, which makes radially printed numbers (tops
+        outward) upright; the strip is ``2 pi 0.8 r`` px long, keeping text near the scale at its
+        size. Upright-printed numbers come out turned by their angle, so this complements
+        :meth:`read` rather than replacing it.
+        """
+        strip, to_image = polar_strip(image_bgr, circle, gap_angle)
+        h, w = strip.shape[:2]
+        quads = [q.quad for q in self.engine.detect(strip, max_side=max(w, h))]
+        if not quads:
+            return []
+        out = []
+        for quad, rec in zip(quads, self.engine.recognize([crop_quad(strip, q) for q in quads]), strict=True):
+            if rec.text and rec.score >= self.min_score:
+                out.append(TextBox(rec.text, rec.score, to_image(quad), rec.digits, rec.digits_score))
+        return out
+
+    # -- the pipeline stage -------------------------------------------------------------------
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray
                      ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
-        """Scale numbers (as markers in crop pixels) and the unit of the crop's dial."""
+        """Scale numbers (markers with boxes in ``crop`` pixels) and the unit of the crop's dial.
+
+        ``arc`` is the fitted scale (ellipse, centre, gap), ``hints`` (N, 2) crop px the crop
+        model's number centres (may be empty). With ``progression`` the markers are limited to up to
+        two arithmetic progressions (:func:`gauged.reader.numbers.filter_progression`, one per
+        concentric scale) when one is found; otherwise all parsed numbers are returned for the
+        scale stage's RANSAC. Failures: ``no_text``, ``no_numbers``.
+        """
         size = RECTIFIED_SIZE
-        radius = 0.36 * size
-        matrix = rectifying_homography(arc.ellipse, arc.zero_angle, size, radius=radius)
+        radius = RECTIFIED_RADIUS * size
+        matrix = rectifying_homography(arc.ellipse, arc.zero_angle, size, radius=radius, centre=arc.centre)
         rectified = warp_rectified(crop, matrix, size)
-        texts = self.read_text(rectified)
-        markers, unit = _markers(texts, matrix, size, radius)
-        if len(markers) < 3:
-            for turn in (cv2.ROTATE_90_CLOCKWISE, cv2.ROTATE_90_COUNTERCLOCKWISE):
-                rotated = cv2.rotate(rectified, turn)
-                extra = [_unrotate(t, turn, size) for t in self.read_text(rotated)]
-                more, more_unit = _markers(extra, matrix, size, radius)
-                markers = _merge(markers, more)
-                unit = unit or more_unit
-        if not texts and not markers:
+        circle = (size / 2.0, size / 2.0, radius)
+        rhints = None
+        if hints is not None and len(hints):
+            rhints = cv2.perspectiveTransform(np.asarray(hints, np.float64).reshape(-1, 1, 2), matrix).reshape(-1, 2)
+        texts = self.read_dial(rectified, circle, rhints)
+        if not texts:
             return StageFailure(STAGE, "no_text", "no text found on the rectified dial")
+        unit = read_unit(texts, circle)
+        markers = scale_markers(texts, circle)
         if not markers:
             return StageFailure(STAGE, "no_numbers", f"{len(texts)} text(s) read, none a scale number: "
                                 + ", ".join(repr(t.text) for t in texts[:6]))
-        return markers, unit
+        if self.progression:
+            markers = keep_progressions(markers, circle)
+        out = []
+        for m in markers:  # back to crop pixels: the box keeps its size around the mapped centre
+            x0, y0, x1, y1 = m.box
+            corners = unrectify_points(matrix, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+            (cx, cy), = unrectify_points(matrix, np.array([[(x0 + x1) / 2, (y0 + y1) / 2]]))
+            hw, hh = np.ptp(corners, axis=0) / 2
+            out.append(ScaleMarker(m.text, m.value, (cx - hw, cy - hh, cx + hw, cy + hh), None, None, m.score))
+        return out, (unit.unit if unit else None)
 
 
-def _unrotate(text: TextBox, turn: int, size: int) -> TextBox:
-    """Map a quad read on the rotated image back to the rectified image."""
-    x, y = text.quad[:, 0], text.quad[:, 1]
-    if turn == cv2.ROTATE_90_CLOCKWISE:  # rotated (u, v) = (size - y, x)  => x = v, y = size - u
-        quad = np.stack([y, size - x], axis=1)
-    else:  # rotated (u, v) = (y, size - x) => x = size - v, y = u
-        quad = np.stack([size - y, x], axis=1)
-    return TextBox(quad, text.text, text.score)
+def scale_markers(texts: Sequence[TextBox], circle: Circle) -> list[ScaleMarker]:
+    """The numbers among ``texts`` (fragments merged) as markers in the same image: box centred on
+    the text, ``angle`` its image angle about the circle's centre (not yet a dial angle)."""
+    out = []
+    for b in merge_fragments(texts):
+        parsed = parse_number(b.text)
+        if parsed and not parsed.fragment:
+            cx, cy = b.center
+            w, h = b.box[2] - b.box[0], b.box[3] - b.box[1]
+            angle = math.atan2(cy - circle[1], cx - circle[0])
+            out.append(ScaleMarker(b.text, parsed.value, (cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2), angle,
+                                   None, b.score))
+    return out
 
 
-def _markers(texts: list[TextBox], matrix: np.ndarray, size: int, radius: float
-             ) -> tuple[list[ScaleMarker], str | None]:
-    markers, unit = [], None
-    centre = np.array([size / 2, size / 2])
-    for text in texts:
-        candidate_unit = parse_unit(text.text)
-        if candidate_unit and unit is None:
-            unit = candidate_unit
-        value = parse_number(text.text)
-        if value is None:
+def _radius(m: ScaleMarker, circle: Circle) -> float:
+    return math.dist(((m.box[0] + m.box[2]) / 2, (m.box[1] + m.box[3]) / 2), circle[:2])
+
+
+def _progression_size(texts: list[TextBox], circle: Circle) -> int:
+    """How many of ``texts`` the best arithmetic progression keeps (0 when none)."""
+    markers = scale_markers(texts, circle)
+    if len(markers) < 3:
+        return len(markers)
+    fit = filter_progression(markers, radii=[_radius(m, circle) for m in markers])
+    return len(fit.kept) if fit else 0
+
+
+def keep_progressions(markers: list[ScaleMarker], circle: Circle) -> list[ScaleMarker]:
+    """Markers of up to two scales (each an arithmetic progression; the second from what the first
+    rejected, for dials with concentric scales), or all markers when no progression is found."""
+    fit = filter_progression(markers, radii=[_radius(m, circle) for m in markers])
+    if not fit:
+        return markers
+    kept = list(fit.kept)
+    rest = [m for m, reason in fit.rejected if reason in ("off_progression", "radius_outlier")]
+    if len(rest) >= 3:
+        second = filter_progression(rest, radii=[_radius(m, circle) for m in rest])
+        if second:
+            kept += list(second.kept)
+    return kept
+
+
+def _tick_mark(box: TextBox, circle: Circle) -> bool:
+    """A "1" that is really a scale tick: one stroke lying across the scale circle, pointing at
+    the centre (printed ones sit inside or outside the circle, not on it)."""
+    if box.text.strip() not in ("1", "l", "I", "|", "!", "i", "-", "—", "_"):
+        return False
+    q = np.asarray(box.quad, float)
+    c = np.array(box.center) - np.array(circle[:2])
+    dist = float(np.linalg.norm(c))
+    along = np.abs((q - np.array(circle[:2])) @ (c / max(dist, 1e-9)))
+    straddles = along.min() <= circle[2] <= along.max()
+    return straddles or abs(dist - circle[2]) < 0.03 * circle[2]
+
+
+def _in_ring(p: tuple[float, float], circle: Circle) -> bool:
+    d = math.dist(p, circle[:2]) / circle[2]
+    return RING[0] <= d <= RING[1]
+
+
+def _explains(box: TextBox, p: tuple[float, float], tol: float) -> bool:
+    x0, y0, x1, y1 = box.box
+    return x0 - tol <= p[0] <= x1 + tol and y0 - tol <= p[1] <= y1 + tol
+
+
+def _dedupe(boxes: list[TextBox]) -> list[TextBox]:
+    """One box per place: of boxes whose centres are within half a text height, the best scored."""
+    out: list[TextBox] = []
+    for b in sorted(boxes, key=lambda b: -b.score):
+        if all(math.dist(b.center, o.center) > 0.5 * max(b.height, o.height, 1.0) for o in out):
+            out.append(b)
+    return out
+
+
+def _split_spaced(boxes: list[TextBox]) -> list[TextBox]:
+    """Split "200 220" (two numbers in one detection) into two boxes, by character position."""
+    out = []
+    for b in boxes:
+        tokens = b.text.split()
+        # "1 6" stays one number (16 or 1.6 with a lost point); "200 220" is two
+        if len(tokens) < 2 or any(len(t) < 2 or not parse_number(t) or parse_number(t).fragment for t in tokens):
+            out.append(b)
             continue
-        r = float(np.linalg.norm(text.centre - centre)) / radius
-        if not RING[0] <= r <= RING[1]:
-            continue  # accuracy class, serial numbers and the like sit elsewhere on the face
-        quad = unrectify_points(matrix, text.quad)
-        box = (float(quad[:, 0].min()), float(quad[:, 1].min()), float(quad[:, 0].max()), float(quad[:, 1].max()))
-        markers.append(ScaleMarker(text.text, value, box, score=text.score))
-    return markers, unit
-
-
-def _merge(first: list[ScaleMarker], second: list[ScaleMarker]) -> list[ScaleMarker]:
-    """Add markers of a second pass unless one of the first lies at (nearly) the same place."""
-    def centre(m: ScaleMarker) -> tuple[float, float]:
-        return ((m.box[0] + m.box[2]) / 2, (m.box[1] + m.box[3]) / 2)
-
-    merged = list(first)
-    for marker in second:
-        if all(math.dist(centre(marker), centre(other)) > 6 for other in merged):
-            merged.append(marker)
-    return merged
+        q = np.asarray(b.quad, np.float32)
+        n = len(b.text)
+        pos = 0
+        for t in tokens:
+            start = b.text.index(t, pos)
+            end = start + len(t)
+            pos = end
+            a0, a1 = start / n, end / n
+            top0, top1 = q[0] + a0 * (q[1] - q[0]), q[0] + a1 * (q[1] - q[0])
+            bot0, bot1 = q[3] + a0 * (q[2] - q[3]), q[3] + a1 * (q[2] - q[3])
+            out.append(TextBox(t, b.score, np.stack([top0, top1, bot1, bot0]), t, b.score))
+    return out
