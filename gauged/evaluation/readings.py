@@ -55,7 +55,16 @@ def load_labels(folder: Path) -> list[Label]:
         items = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines() if line.strip()]
     else:
         raise FileNotFoundError(f"{folder} has neither labels.json nor labels.jsonl")
-    return [Label(str(i["image"]), float(i["reading"]), float(i["min"]), float(i["max"])) for i in items]
+    # A synthetic scene without any gauge has nothing to read; it is left out.
+    return [_label(item) for item in items if "reading" in item or item.get("gauges")]
+
+
+def _label(item: dict) -> Label:
+    """A label of the dev-set format, or of a ``gauged synth images`` record (its largest gauge)."""
+    if "reading" in item:
+        return Label(str(item["image"]), float(item["reading"]), float(item["min"]), float(item["max"]))
+    gauge = max(item["gauges"], key=lambda g: (g["box"][2] - g["box"][0]) * (g["box"][3] - g["box"][1]))
+    return Label(str(item["image"]), float(gauge["value"]), float(gauge["min"]), float(gauge["max"]))
 
 
 def image_path(folder: Path, label: Label) -> Path:
