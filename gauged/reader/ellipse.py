@@ -115,6 +115,22 @@ def _ends_from_gap(angles: np.ndarray) -> tuple[float, float] | None:
     return float(start), float(end)
 
 
+SNAP_RADIANS = np.radians(3.0)
+
+
+def _snap(angle: float, notch_angles: np.ndarray) -> float:
+    """The angle of the major notch nearest ``angle`` when one is within 3 degrees, else ``angle``.
+
+    The end-notch heatmaps say which notch is an end; the many major notches locate it more exactly
+    (an end peak a few pixels off is a percent of the reading).
+    """
+    if len(notch_angles) == 0:
+        return angle
+    diff = np.abs(np.remainder(notch_angles - angle + np.pi, 2 * np.pi) - np.pi)
+    k = int(np.argmin(diff))
+    return float(notch_angles[k]) if diff[k] <= SNAP_RADIANS else angle
+
+
 def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4,
                   max_rms_fraction: float = 0.02, min_axis_ratio: float = 0.35) -> ScaleArc | StageFailure:
     """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
@@ -159,8 +175,11 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
             return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and no gap between the notches "
                                 "stands out as the scale's")
         gap_start, gap_end = ends
-    start = (float(dial_angle(ellipse, keypoints.start.points[:1], centre)[0]) if len(keypoints.start) else gap_start)
-    end = (float(dial_angle(ellipse, keypoints.end.points[:1], centre)[0]) if len(keypoints.end) else gap_end)
+    notch_angles = dial_angle(ellipse, points[inliers], centre)
+    start = (_snap(float(dial_angle(ellipse, keypoints.start.points[:1], centre)[0]), notch_angles)
+             if len(keypoints.start) else gap_start)
+    end = (_snap(float(dial_angle(ellipse, keypoints.end.points[:1], centre)[0]), notch_angles)
+           if len(keypoints.end) else gap_end)
     span = scale_span(start, end)
     if not MIN_SPAN <= span <= MAX_SPAN:
         return StageFailure(STAGE, "implausible_span", f"scale spans {np.degrees(span):.0f} degrees")
