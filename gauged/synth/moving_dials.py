@@ -22,6 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from gauged.synth.recording import ROS2_COMPRESSED_IMAGE
 from gauged.training.dial_renderer import _apply, _background, draw_dial, random_homography
 
 NS_PER_S = 1_000_000_000
@@ -135,19 +136,6 @@ def render_frames(dials: list[DialSpec], seconds: float, fps: float, seed: int, 
         yield stamp_ns, (scene * light + noise).clip(0, 255).astype(np.uint8), truth
 
 
-ROS_COMPRESSED_IMAGE = """std_msgs/Header header
-string format
-uint8[] data
-================================================================================
-MSG: std_msgs/Header
-builtin_interfaces/Time stamp
-string frame_id
-================================================================================
-MSG: builtin_interfaces/Time
-int32 sec
-uint32 nanosec"""
-
-
 def write_recording(out: Path, dials: list[DialSpec], seconds: float, fps: float, seed: int, camera: str = "cam1",
                     ros2: bool = False, jpeg_quality: int = 70, progress: Callable[[int, int], None] | None = None,
                     width: int = 960, height: int = 540) -> int:
@@ -161,7 +149,7 @@ def write_recording(out: Path, dials: list[DialSpec], seconds: float, fps: float
             from mcap_ros2.writer import Writer as Ros2Writer
 
             ros = Ros2Writer(stream, compression=CompressionType.ZSTD)
-            schema = ros.register_msgdef("sensor_msgs/msg/CompressedImage", ROS_COMPRESSED_IMAGE)
+            schema = ros.register_msgdef("sensor_msgs/msg/CompressedImage", ROS2_COMPRESSED_IMAGE)
             writer = ros._writer  # the truth channel is plain JSON beside the ROS messages
         else:
             writer = Writer(stream, compression=CompressionType.ZSTD)
