@@ -10,6 +10,7 @@ import json
 import logging
 import math
 from collections.abc import Iterator
+import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -38,6 +39,11 @@ def render_item(args: tuple[str, int, int, int, int, int, bool]) -> tuple[np.nda
     return scene.image, scene.record, None
 
 
+# Workers are spawned, not forked: a fork copies whatever threads the parent runs (a Zenoh runtime,
+# onnxruntime pools) in a locked state, which hung the workers inside the test suite.
+_SPAWN = multiprocessing.get_context("spawn")
+
+
 def _init_worker() -> None:
     cv2.setNumThreads(1)  # processes, not threads, share the cores
 
@@ -50,7 +56,7 @@ def render_batch(kind: str, seed: int, count: int, *, width: int = 1280, height:
         for i, job in enumerate(jobs):
             yield (i, *render_item(job))
         return
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker) as pool:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN, initializer=_init_worker) as pool:
         for i, result in enumerate(pool.map(render_item, jobs, chunksize=4)):
             yield (i, *result)
 
@@ -108,7 +114,7 @@ def _subset(kind: str, seed: int, indices: list[int], tile: int, workers: int) -
     if workers <= 1 or len(jobs) < 2:
         results = [render_item(job) for job in jobs]
     else:
-        with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN, initializer=_init_worker) as pool:
             results = list(pool.map(render_item, jobs, chunksize=2))
     for i, (image, record, _) in zip(indices, results):
         yield i, image, record, None

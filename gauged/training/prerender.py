@@ -41,10 +41,10 @@ def _render_one(args: tuple[int, int]) -> CropSample:
 
 def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[CropSample]:
     """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order."""
-    from multiprocessing import Pool
+    from multiprocessing import get_context
 
     jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
-    with Pool(workers) as pool:
+    with get_context("spawn").Pool(workers) as pool:  # spawn: a fork would copy held locks
         for index, sample in enumerate(pool.imap(_render_one, jobs, chunksize=16)):
             if index % 1000 == 0:
                 log.info("rendered %d/%d crops", index, count)
@@ -65,10 +65,10 @@ def _render_scene(args: tuple[int, int]) -> DetectorSample:
 
 
 def synthetic_scene_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[DetectorSample]:
-    from multiprocessing import Pool
+    from multiprocessing import get_context
 
     jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
-    with Pool(workers) as pool:
+    with get_context("spawn").Pool(workers) as pool:  # spawn: a fork would copy held locks
         for index, sample in enumerate(pool.imap(_render_scene, jobs, chunksize=8)):
             if index % 500 == 0:
                 log.info("rendered %d/%d scenes", index, count)
