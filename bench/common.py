@@ -4,10 +4,7 @@ from __future__ import annotations
 
 import os
 import platform
-import statistics
 import sys
-import time
-from collections.abc import Callable
 
 
 def machine() -> str:
@@ -26,12 +23,4 @@ def header(title: str) -> None:
     print(f"# {title}\n# machine: {machine()}\n# command: {' '.join([os.path.basename(sys.executable), *sys.argv])}")
 
 
-def median_s(fn: Callable[[], object], runs: int, warmup: int = 3) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+from gauged.evaluation.timing import median_s  # noqa: E402,F401 (re-exported for the scripts)

@@ -12,12 +12,12 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from gauged.evaluation.timing import median_s
 from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL
@@ -27,14 +27,7 @@ from gauged.types import StageFailure
 
 
 def median_ms(fn, runs: int = 100, warmup: int = 10) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return 1000 * float(np.median(times))
+    return 1000 * median_s(fn, runs, warmup)
 
 
 def detector_metrics(detector: GaugeDetector, root: Path) -> dict:

@@ -39,16 +39,25 @@ def _render_one(args: tuple[int, int]) -> CropSample:
     return CropSample(image, points, labels.needle, f"dial_renderer/{seed}")
 
 
-def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[CropSample]:
-    """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order."""
+def _in_pool(render, jobs: list[tuple[int, int]], what: str, chunksize: int, workers: int) -> Iterator:
+    """Results of ``render`` over ``jobs`` in order, on ``workers`` spawned processes, with progress.
+
+    Spawned, not forked: a fork would copy whatever locks the parent's threads hold.
+    """
     from multiprocessing import get_context
 
-    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
-    with get_context("spawn").Pool(workers) as pool:  # spawn: a fork would copy held locks
-        for index, sample in enumerate(pool.imap(_render_one, jobs, chunksize=16)):
-            if index % 1000 == 0:
-                log.info("rendered %d/%d crops", index, count)
+    every = max(1, len(jobs) // 8)
+    with get_context("spawn").Pool(workers) as pool:
+        for index, sample in enumerate(pool.imap(render, jobs, chunksize=chunksize)):
+            if index % every == 0:
+                log.info("rendered %d/%d %s", index, len(jobs), what)
             yield sample
+
+
+def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[CropSample]:
+    """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order."""
+    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
+    return _in_pool(_render_one, jobs, "crops", 16, workers)
 
 
 def _render_scene(args: tuple[int, int]) -> DetectorSample:
@@ -65,14 +74,9 @@ def _render_scene(args: tuple[int, int]) -> DetectorSample:
 
 
 def synthetic_scene_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[DetectorSample]:
-    from multiprocessing import get_context
-
+    """Rendered scenes (letterboxed to ``size``) for seeds ``first_seed ..``, in seed order."""
     jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
-    with get_context("spawn").Pool(workers) as pool:  # spawn: a fork would copy held locks
-        for index, sample in enumerate(pool.imap(_render_scene, jobs, chunksize=8)):
-            if index % 500 == 0:
-                log.info("rendered %d/%d scenes", index, count)
-            yield sample
+    return _in_pool(_render_scene, jobs, "scenes", 8, workers)
 
 
 def main(argv: list[str] | None = None) -> int:
