@@ -58,6 +58,16 @@ def mask_iou(predicted: np.ndarray, labelled: np.ndarray) -> float:
     return float(np.logical_and(predicted, labelled).sum() / union) if union else 1.0
 
 
+def needle_mask_at(logits: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """The needle mask at a label's own resolution: the (h, w) logit map resized bilinearly to
+    ``shape[:2]`` (cell centres kept aligned) and cut at probability 0.5. Measuring IoU at the output
+    grid instead would charge the model for the grid's own quantisation of a thin needle."""
+    import cv2
+
+    height, width = shape[:2]
+    return cv2.resize(np.asarray(logits, np.float32), (width, height), interpolation=cv2.INTER_LINEAR) > 0
+
+
 def mask_direction(mask: np.ndarray, reference: tuple[float, float]) -> float | None:
     """Angle (radians, image convention) of the mask's main axis, pointing away from ``reference``.
 

@@ -2,7 +2,8 @@
 
 - Detector on ``substation-dials``: per frame, the best IoU between the labelled dial box and any
   detection; mean IoU and recall at IoU 0.5.
-- Crop model on ``needle-polygons/valid``: needle mask IoU at the model's output resolution and the
+- Crop model on ``needle-polygons/valid``: needle mask IoU at the photo's resolution (logits resized
+  bilinearly, cut at 0.5) and the
   needle direction error (mask axis oriented away from the image centre, see
   :func:`gauged.evaluation.model_metrics.mask_direction`).
 - Crop model on a synthetic crop shard: major-notch recall and unassigned share within 4 px at
@@ -18,10 +19,10 @@ import cv2
 import numpy as np
 
 from gauged.evaluation.timing import median_s
-from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points
+from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL
-from gauged.reader.keypoints import decode_crop_maps, sigmoid
+from gauged.reader.keypoints import decode_crop_maps
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path, to_model_input
 from gauged.types import StageFailure
 
@@ -51,8 +52,8 @@ def needle_metrics(crop: OnnxModel, root: Path) -> dict:
     for sample in load_needle_split(root, "valid"):
         image, mask = sample.load()
         logits = crop(to_model_input(cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)))
-        pred = sigmoid(logits[-1]) >= 0.5
-        truth = cv2.resize(mask, pred.shape[::-1], interpolation=cv2.INTER_NEAREST) > 0
+        pred = needle_mask_at(logits[-1], mask.shape)
+        truth = mask > 0
         ious.append(mask_iou(pred, truth))
         centre = (pred.shape[1] / 2, pred.shape[0] / 2)
         a, b = mask_direction(pred, centre), mask_direction(truth, centre)

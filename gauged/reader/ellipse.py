@@ -96,6 +96,39 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[El
     return ellipse, keep
 
 
+CONCENTRIC = 0.06  # centres of two scale rings of one dial lie within this fraction of the outer radius
+
+
+def _scale_ring(points: np.ndarray, ellipse: Ellipse, inliers: np.ndarray, ends: np.ndarray, tol_px: float,
+                min_notches: int) -> tuple[Ellipse, np.ndarray, int]:
+    """The ring of the primary scale on a dial with two concentric scales (bar outside, psi inside).
+
+    The major-notch map marks the notches of both scales, so the consensus of :func:`_robust_fit` may
+    hold only one ring. When the other notches form a second ring about the same centre, the scale
+    is the ring holding the start/end notches (``ends`` marks those points), else the outer one.
+    Otherwise the first fit is returned unchanged and the caller judges it. The third value is how
+    many notches the ring(s) explain.
+    """
+    unchanged = ellipse, inliers, int(inliers.sum())
+    rest = np.flatnonzero(~inliers)
+    if len(rest) < min_notches:
+        return unchanged
+    second = _robust_fit(points[rest], tol_px)
+    if isinstance(second, StageFailure):
+        return unchanged
+    other, keep = second
+    other_inliers = np.zeros(len(points), bool)
+    other_inliers[rest[keep]] = True
+    outer = max(ellipse.a, other.a)
+    concentric = np.hypot(ellipse.cx - other.cx, ellipse.cy - other.cy) <= CONCENTRIC * outer
+    separate = abs(ellipse.a - other.a) > 2 * tol_px
+    if not (concentric and separate and other_inliers.sum() >= min_notches):
+        return unchanged
+    rings = [(ellipse, inliers), (other, other_inliers)]
+    rings.sort(key=lambda ring: (int((ring[1] & ends).sum()), ring[0].a), reverse=True)
+    return rings[0][0], rings[0][1], int(inliers.sum() + other_inliers.sum())
+
+
 GAP_CLEARLY_LARGER = 1.4  # the scale's gap must exceed the notch spacing by this factor to be recognised
 
 
@@ -151,10 +184,15 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     if isinstance(fitted, StageFailure):
         return fitted
     ellipse, inliers = fitted
+    explained = int(inliers.sum())
+    ends = np.zeros(len(points), bool)
+    ends[len(keypoints.major.points):] = True
+    if explained < max(min_notches, 0.6 * len(points)) or (ends.any() and not (inliers & ends).any()):
+        ellipse, inliers, explained = _scale_ring(points, ellipse, inliers, ends, 0.012 * crop_size, min_notches)
     if ellipse.b / ellipse.a < min_axis_ratio:
         return StageFailure(STAGE, "too_oblique", f"axis ratio {ellipse.b / ellipse.a:.2f} < {min_axis_ratio}")
-    if inliers.sum() < max(min_notches, 0.6 * len(points)):
-        return StageFailure(STAGE, "poor_fit", f"only {inliers.sum()} of {len(points)} notches lie on one ellipse")
+    if explained < max(min_notches, 0.6 * len(points)):
+        return StageFailure(STAGE, "poor_fit", f"only {explained} of {len(points)} notches lie on the scale ring(s)")
     rms = float(np.sqrt(np.mean(orthogonal_distance(ellipse, points[inliers]) ** 2)))
     if rms > max_rms_fraction * ellipse.a:
         return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")

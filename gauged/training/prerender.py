@@ -39,6 +39,36 @@ def _render_one(args: tuple[int, int]) -> CropSample:
     return CropSample(image, points, labels.needle, f"dial_renderer/{seed}")
 
 
+def synth_points(truth: dict) -> dict[str, list[list[float]] | None]:
+    """Crop-model keypoint labels from a :mod:`gauged.synth.truth` gauge record: start and end of the
+    primary scale, the major notches and number centres of every scale, needle tip and pivot."""
+    scales = truth.get("scales") or []
+    primary = next((s for s in scales if s.get("role") == "primary"), scales[0] if scales else None)
+    majors = [m["point"] for s in scales for m in s.get("majors", [])]
+    numbers = [[(n["box"][0] + n["box"][2]) / 2, (n["box"][1] + n["box"][3]) / 2]
+               for s in scales for n in s.get("numbers", []) if n.get("kind") == "number"]
+    needle = truth.get("needle") or {}
+    return {
+        "start": [primary["start"]] if primary and primary.get("start") else None,
+        "end": [primary["end"]] if primary and primary.get("end") else None,
+        "major": majors or None,
+        "tip": [needle["tip"]] if needle.get("tip") else None,
+        "pivot": [needle["pivot"]] if needle.get("pivot") else None,
+        "numbers": numbers or None,
+    }
+
+
+def _render_synth_one(args: tuple[int, int]) -> CropSample:
+    """One crop of the full synthetic engine (:mod:`gauged.synth`): the pointing part of the needle
+    is the mask (the counterweight is not, as in the real needle labels)."""
+    from gauged.synth.crop import render_crop
+
+    seed, size = args
+    sample = render_crop(seed, size)
+    needle = (sample.needle_mask == 1).astype(np.uint8)
+    return CropSample(sample.image, synth_points(sample.truth), needle, f"synth/{seed}")
+
+
 def _in_pool(render, jobs: list[tuple[int, int]], what: str, chunksize: int, workers: int) -> Iterator:
     """Results of ``render`` over ``jobs`` in order, on ``workers`` spawned processes, with progress.
 
@@ -58,6 +88,12 @@ def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int 
     """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order."""
     jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
     return _in_pool(_render_one, jobs, "crops", 16, workers)
+
+
+def synth_engine_crop_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[CropSample]:
+    """Crops of the full synthetic engine for seeds ``first_seed ..``, in seed order."""
+    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
+    return _in_pool(_render_synth_one, jobs, "synth crops", 16, workers)
 
 
 def _render_scene(args: tuple[int, int]) -> DetectorSample:
@@ -92,6 +128,8 @@ def main(argv: list[str] | None = None) -> int:
     crops.add_argument("--count", type=int, required=True)
     crops.add_argument("--size", type=int, default=224)
     crops.add_argument("--out", type=Path, required=True)
+    crops.add_argument("--engine", choices=("synth", "dial"), default="synth",
+                       help="synth: the full gauged.synth engine (default); dial: the simple training renderer")
     scenes = sub.add_parser("scenes", help="synthetic camera frames with several dials -> detector shard")
     scenes.add_argument("--seed", type=int, default=0)
     scenes.add_argument("--count", type=int, required=True)
@@ -104,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
         written = write_crop_shard(args.out, real_needle_samples(args.root, args.split, args.size), count, args.size)
         log.info("wrote %d needle photos to %s", written, args.out)
     elif args.what == "crops":
-        written = write_crop_shard(args.out, synthetic_crop_samples(args.seed, args.count, args.size), args.count, args.size)
+        samples = (synth_engine_crop_samples if args.engine == "synth" else synthetic_crop_samples)(args.seed, args.count, args.size)
+        written = write_crop_shard(args.out, samples, args.count, args.size)
         log.info("wrote %d synthetic crops to %s", written, args.out)
     elif args.what == "scenes":
         written = write_detector_shard(args.out, synthetic_scene_samples(args.seed, args.count, args.size), args.count,

@@ -14,14 +14,13 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import time
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from gauged.evaluation.model_metrics import angle_error_deg, mask_direction, mask_iou, match_points
+from gauged.evaluation.model_metrics import angle_error_deg, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps
 from gauged.training.augment import photometric, random_affine, warp_image, warp_points
 from gauged.training.loop import TrainSettings, train
@@ -96,8 +95,8 @@ def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> di
                         ends_found += int(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - np.asarray(truth[0])) <= tol)
         for image, mask in real_val[:limit]:
             logits = model(torch.from_numpy(image[None]))[0, -1].numpy()
-            pred = logits > 0
-            truth = mask[::2, ::2] > 0 if mask.shape[0] == 2 * pred.shape[0] else mask
+            pred = needle_mask_at(logits, mask.shape)
+            truth = mask > 0
             ious.append(mask_iou(pred, truth))
             centre = (pred.shape[1] / 2, pred.shape[0] / 2)
             a, b = mask_direction(pred, centre), mask_direction(truth, centre)
@@ -117,14 +116,14 @@ def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> di
 
 
 def load_real_needle_val(root: Path, size: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The needle-polygons ``valid`` photos resized to the model input, with masks at full input size."""
+    """The needle-polygons ``valid`` photos resized to the model input, with their masks at the photo's
+    own resolution (the IoU is measured there, as the paper does)."""
     import cv2
 
     out = []
     for sample in load_needle_split(root, "valid"):
         image, mask = sample.load()
         image = cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)
-        mask = cv2.resize(mask, (size // 2, size // 2), interpolation=cv2.INTER_NEAREST)
         x = image[:, :, ::-1].astype(np.float32).transpose(2, 0, 1) / 255.0
         out.append((np.ascontiguousarray(x), mask))
     return out
@@ -156,6 +155,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--scratch", action="store_true", help="random init instead of ImageNet EfficientNet-Lite0")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--init", type=Path, help="start from this checkpoint's weights (fine-tuning; any input size)")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
@@ -167,6 +167,9 @@ def main(argv: list[str] | None = None) -> int:
     real_val = load_real_needle_val(args.real_val, args.size) if args.real_val else []
     # channels_last makes the depthwise convolutions' backward pass ~1.7x faster on CPU (measured).
     model = CropNet(args.size, pretrained=not args.scratch).to(memory_format=torch.channels_last)
+    if args.init:
+        model.load_state_dict(torch.load(args.init, map_location="cpu", weights_only=False)["model"])
+        log.info("initialised from %s", args.init)
     log.info("crop model: %d parameters, %s init; %s training samples", count_parameters(model),
              "scratch" if args.scratch else "ImageNet", [len(s) for s in shards])
     steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch

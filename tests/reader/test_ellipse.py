@@ -99,3 +99,17 @@ def test_fit_scale_arc_refuses_to_guess_ends_when_no_gap_stands_out():
     failure = fit_scale_arc(keypoints_for(dial, start=False, end=False), CROP)
     assert not failure and failure.reason == "no_scale_ends"
     assert fit_scale_arc(keypoints_for(dial), CROP)  # with the end notches found it is read
+
+
+@pytest.mark.parametrize("inner_majors", [9, 21])
+def test_fit_scale_arc_on_a_dial_with_two_scales_takes_the_ring_with_the_ends(inner_majors):
+    """bar outside, psi inside: the major-notch map marks both rings; the scale is the ring holding
+    the start and end notches even when the inner ring has more notches."""
+    outer = Dial(ellipse=Ellipse(128, 128, 100, 92, 0.3), majors=9)
+    inner = Dial(ellipse=Ellipse(128, 128, 70, 64.4, 0.3), majors=inner_majors, start_deg=140, span_deg=260)
+    notches = np.vstack([outer.notch_points(), inner.notch_points()])
+    arc = fit_scale_arc(keypoints_for(outer, majors=notches, pivot=False), CROP)
+    assert arc, arc
+    assert abs(arc.ellipse.a - 100) < 0.5 and abs(arc.ellipse.b - 92) < 0.5
+    assert abs(angle_difference(arc.start_angle, outer.start)) < math.radians(0.5)
+    assert abs(angle_difference(arc.end_angle, outer.end)) < math.radians(0.5)

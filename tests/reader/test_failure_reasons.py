@@ -1,0 +1,212 @@
+"""Every (stage, reason) the reader can return is provoked by a test built on a known input.
+
+The stages after the crop model run on maps drawn at a known truth (:mod:`tests.reader.dial_maps`);
+where the pipeline itself is driven, a small stand-in crop model returns those maps as logits, so no
+trained model is needed. The last test checks that every declared reason is named by some test.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from gauged.config.model import GaugeConfig, ScaleLockConfig
+from gauged.gauge_runner import GaugeRunner
+from gauged.geometry.dial_frame import point_at_dial_angle
+from gauged.reader.crop import MIN_GAUGE_PX, Crop, crop_gauge
+from gauged.reader.detect import GaugeDetector
+from gauged.reader.ellipse import fit_scale_arc
+from gauged.reader.failures import failure_pairs
+from gauged.reader.keypoints import CROP_CHANNELS
+from gauged.reader.needle import NeedleReading, fit_needle
+from gauged.reader.pipeline import GaugeReader, KnownScale
+from gauged.reader.reading import Value, read_value
+from gauged.reader.scale import fit_scales, scale_from_prior
+from gauged.tracking.tracker import GaugeTracker
+from gauged.training.targets import gaussian_heatmap
+from gauged.types import Frame, ScaleMarker, StageFailure
+
+from .dial_maps import CROP, STRIDE, Dial, keypoints_for, needle_prob
+
+TESTS = Path(__file__).resolve().parents[1]
+
+
+class DialCropModel:
+    """Stand-in for the crop model (:class:`gauged.reader.onnx_model.OnnxModel`): whatever the crop,
+    it answers with the logits of ``dial`` drawn at its known truth (as :func:`keypoints_for` does)."""
+
+    input_size = CROP
+
+    def __init__(self, dial: Dial):
+        shape = (CROP // STRIDE, CROP // STRIDE)
+        notches = dial.notch_points()
+        heat = {
+            "start": gaussian_heatmap(notches[:1], shape, STRIDE, 1.5),
+            "end": gaussian_heatmap(notches[-1:], shape, STRIDE, 1.5),
+            "major": gaussian_heatmap(notches, shape, STRIDE, 1.5),
+            "tip": np.zeros(shape, np.float32),
+            "pivot": gaussian_heatmap(np.array([dial.ellipse.center]), shape, STRIDE, 1.5),
+            "numbers": np.zeros(shape, np.float32),
+            "needle": needle_prob(dial),
+        }
+        prob = np.stack([heat[name] for name in CROP_CHANNELS]).astype(np.float64).clip(1e-6, 1 - 1e-6)
+        self.logits = np.log(prob / (1 - prob)).astype(np.float32)
+        self.calls = 0
+
+    def __call__(self, image_rgb01: np.ndarray) -> np.ndarray:
+        assert image_rgb01.shape == (CROP, CROP, 3) and image_rgb01.dtype == np.float32
+        self.calls += 1
+        return self.logits
+
+
+class BlankDetectorModel:
+    """Stand-in for the detector model: CenterNet maps with no centre above any threshold."""
+
+    input_size = 256
+    metadata = {"stride": 8}
+
+    def __call__(self, image_rgb01: np.ndarray) -> np.ndarray:
+        assert image_rgb01.shape == (256, 256, 3)
+        return np.full((5, 32, 32), -8.0, np.float32)
+
+
+def arc_of(dial: Dial):
+    arc = fit_scale_arc(keypoints_for(dial), CROP)
+    assert not isinstance(arc, StageFailure), arc
+    return arc
+
+
+def assert_failure(result, stage: str, reason: str) -> StageFailure:
+    assert isinstance(result, StageFailure), f"expected a {stage}/{reason} failure, got {result!r}"
+    assert (result.stage, result.reason) == (stage, reason), result
+    return result
+
+
+# detect ------------------------------------------------------------------------------------------
+
+def test_detect_gauge_not_found_when_no_detection_is_associated():
+    config = GaugeConfig(id="g1", camera="cam1")  # no roi: the gauge must come from detection
+    reader = GaugeReader(DialCropModel(Dial()))
+    runner = GaugeRunner(config, ScaleLockConfig(), reader, GaugeTracker.from_config(config))
+    assert runner.needs_box
+    frame = Frame(np.full((240, 320, 3), 128, np.uint8), stamp_ns=1_000_000_000, camera="cam1", frame_id=0)
+
+    output = runner.process(frame, None)
+
+    failure = assert_failure(output.failure, "detect", "gauge_not_found")
+    assert "g1" in failure.detail
+    assert output.read is None and reader.crop_model.calls == 0  # nothing was read
+    assert output.reading.value is None and output.reading.failure == failure
+
+
+def test_detect_no_gauge_when_the_detector_finds_nothing():
+    detector = GaugeDetector(BlankDetectorModel(), threshold=0.3)
+    result = detector.detect(np.full((240, 320, 3), 128, np.uint8))
+    assert_failure(result, "detect", "no_gauge")
+    # read_image hands the detector's failure on unchanged
+    reader = GaugeReader(DialCropModel(Dial()), detector=detector)
+    assert_failure(reader.read_image(np.full((240, 320, 3), 128, np.uint8)), "detect", "no_gauge")
+
+
+# crop --------------------------------------------------------------------------------------------
+
+def test_crop_gauge_too_small_below_min_gauge_px():
+    image = np.full((240, 320, 3), 128, np.uint8)
+    small = (100.0, 100.0, 100.0 + MIN_GAUGE_PX - 1, 160.0)  # 23 px wide, 60 px high: the short side counts
+    failure = assert_failure(crop_gauge(image, small, CROP), "crop", "gauge_too_small")
+    assert f"need {MIN_GAUGE_PX}" in failure.detail
+    # one pixel more is cropped
+    assert isinstance(crop_gauge(image, (100.0, 100.0, 100.0 + MIN_GAUGE_PX, 160.0), CROP), Crop)
+    # and the pipeline stops there, before the crop model runs
+    reader = GaugeReader(DialCropModel(Dial()))
+    read = reader.read_box(image, small, known=KnownScale(0, 10, "bar"))
+    assert_failure(read.failure, "crop", "gauge_too_small")
+    assert read.crop is None and reader.crop_model.calls == 0
+
+
+# needle ------------------------------------------------------------------------------------------
+
+def test_needle_no_needle_on_an_empty_mask():
+    arc = arc_of(Dial())
+    assert_failure(fit_needle(np.zeros((CROP // STRIDE, CROP // STRIDE), np.float32), STRIDE, arc), "needle", "no_needle")
+
+
+def test_needle_off_centre_when_the_line_misses_the_pivot():
+    dial = Dial(needle_deg=0.0)  # a horizontal needle pointing right from the centre
+    arc = arc_of(dial)
+    centred = fit_needle(needle_prob(dial), STRIDE, arc)
+    assert isinstance(centred, NeedleReading) and centred.offset < 0.01
+    # The same bar moved 40 px (0.4 radii) down: a line that no needle turning about the pivot makes.
+    shifted = np.roll(needle_prob(dial), 40 // STRIDE, axis=0)
+    failure = assert_failure(fit_needle(shifted, STRIDE, arc), "needle", "needle_off_centre")
+    offset = float(re.search(r"passes ([\d.]+) radii", failure.detail).group(1))
+    assert 0.38 <= offset <= 0.43  # 40 px on a radius of 100 px, give or take the stride-2 cells
+
+
+# ocr ---------------------------------------------------------------------------------------------
+
+def test_ocr_unavailable_without_engine_and_without_known_scale():
+    dial = Dial()
+    image = np.full((CROP, CROP, 3), 200, np.uint8)
+    box = (0.0, 0.0, float(CROP), float(CROP))
+    reader = GaugeReader(DialCropModel(dial), ocr=None)
+
+    read = reader.read_box(image, box)
+
+    assert_failure(read.failure, "ocr", "ocr_unavailable")
+    assert read.arc is not None and read.needle is not None  # every stage before OCR succeeded
+    assert read.scales == [] and read.value is None
+    # with a configured scale the same gauge is read without OCR
+    known = reader.read_box(image, box, known=KnownScale(0.0, 10.0, "bar"))
+    assert known.failure is None and isinstance(known.value, Value)
+    assert abs(known.value.value - 10 * (dial.needle_deg - dial.start_deg) / dial.span_deg) < 0.05
+
+
+# reading -----------------------------------------------------------------------------------------
+
+def test_reading_needle_off_scale_when_the_needle_rests_in_the_gap():
+    dial = Dial(needle_deg=90.0)  # straight down: in the gap between the end (45 deg) and start (135 deg) notches
+    arc = arc_of(dial)
+    needle = fit_needle(needle_prob(dial), STRIDE, arc)
+    assert isinstance(needle, NeedleReading)
+    failure = assert_failure(read_value(needle, arc, scale_from_prior(arc, 0.0, 10.0, "bar")),
+                             "reading", "needle_off_scale")
+    assert "-17%" in failure.detail  # 45 of the 270 degrees before the start notch
+
+
+def _marker(dial: Dial, deg: float, value: float) -> ScaleMarker:
+    x, y = point_at_dial_angle(dial.ellipse.scaled(0.8), math.radians(deg))[0]
+    return ScaleMarker(f"{value:g}", float(value), (x - 6, y - 5, x + 6, y + 5))
+
+
+def test_reading_low_confidence_on_scattered_numbers_and_a_weak_needle():
+    dial = Dial()
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    consistent = [_marker(dial, dial.start_deg + k * step, k) for k in (0, 4, 8)]
+    values = np.random.default_rng(3).permutation(50)[:12] + 20  # misread numbers, none on the scale's line
+    scattered = [_marker(dial, dial.start_deg + k * step + step / 2, v) for k, v in zip(range(12), values)]
+    scales = fit_scales(arc, consistent + scattered)
+    assert not isinstance(scales, StageFailure), scales
+    assert (scales[0].inliers, len(scales[0].markers)) == (3, 15)
+    weak = fit_needle(np.where(needle_prob(dial) >= 0.5, 0.55, 0.0).astype(np.float32), STRIDE, arc)
+    assert isinstance(weak, NeedleReading) and abs(weak.mask_score - 0.55) < 1e-6
+
+    assert_failure(read_value(weak, arc, scales[0]), "reading", "low_confidence")
+    # either weakness alone is still read (the confidence is a cube root of the product of the parts)
+    clean = fit_scales(arc, consistent)[0]
+    assert isinstance(read_value(weak, arc, clean), Value)
+    assert isinstance(read_value(fit_needle(needle_prob(dial), STRIDE, arc), arc, scales[0]), Value)
+
+
+# coverage ----------------------------------------------------------------------------------------
+
+def test_every_declared_reason_is_named_by_a_test():
+    """Each reason of :func:`failure_pairs` appears quoted in some test file: a new reason needs a test."""
+    text = "\n".join(path.read_text() for path in TESTS.rglob("*.py"))
+    quoted = set(re.findall(r'"(\w+)"', text))
+    missing = sorted({f"{stage}/{reason}" for stage, reason in failure_pairs() if reason not in quoted})
+    assert not missing, f"reasons no test names: {missing}"
