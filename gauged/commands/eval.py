@@ -31,6 +31,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     readings.add_argument("--data", type=Path, required=True, help="folder with labels.json or labels.jsonl")
     readings.add_argument("--json", action="store_true", help="print the full result as JSON")
     readings.add_argument("--threads", type=int, default=2)
+    readings.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models")
     readings.set_defaults(func=run_readings)
     models = sub.add_parser(
         "models", help="detector and crop-model metrics on the real sets (and synthetic crops)",
@@ -41,6 +42,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     models.add_argument("--synth", type=Path, help="synthetic validation crop shard (notch metrics)")
     models.add_argument("--json", action="store_true")
     models.add_argument("--threads", type=int, default=2)
+    models.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models")
     models.set_defaults(func=run_models)
     recording = sub.add_parser(
         "recording", help="readings of a replay against a synthetic recording's truth channel",
@@ -59,7 +61,7 @@ def run_readings(args: argparse.Namespace) -> int:
 
     try:
         labels = load_labels(args.data)
-        reader = build_reader(ReaderConfig(threads=args.threads))
+        reader = build_reader(ReaderConfig(threads=args.threads, models_dir=args.models))
     except FileNotFoundError as exc:
         print(exc, file=sys.stderr)
         return 2
@@ -86,7 +88,7 @@ def run_models(args: argparse.Namespace) -> int:
     from gauged.evaluation.models import evaluate_models, format_models
 
     try:
-        result = evaluate_models(args.data, args.synth, args.threads)
+        result = evaluate_models(args.data, args.synth, args.threads, args.models)
     except ModelNotAvailable as exc:
         log.error("%s", exc)
         return 1

@@ -33,6 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--scale", nargs="+", metavar=("MIN MAX", "UNIT"), help="known scale: MIN MAX [UNIT]")
     parser.add_argument("--threads", type=int, default=2, help="onnxruntime threads (default 2)")
     parser.add_argument("--min-confidence", type=float, default=0.5, help="refuse readings below this (default 0.5)")
+    parser.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models")
     parser.set_defaults(func=run)
 
 
@@ -84,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         print(exc, file=sys.stderr)
         return 2
     try:
-        reader = build_reader(ReaderConfig(threads=args.threads, min_confidence=args.min_confidence))
+        reader = build_reader(ReaderConfig(threads=args.threads, min_confidence=args.min_confidence, models_dir=args.models))
     except ModelNotAvailable as exc:
         log.error("%s", exc)
         return 1

@@ -96,6 +96,8 @@ class ReaderConfig(BaseModel):
 
     threads: int = Field(2, ge=1, le=64, description="onnxruntime intra-op threads per model.")
     min_confidence: float = Field(0.5, ge=0, le=1, description="Readings below this confidence are refused.")
+    models_dir: Path | None = Field(None, description="Folder whose crop.onnx/detector.onnx replace the shipped "
+                                    "models (a candidate model under evaluation); unset: the shipped ones.")
 
 
 class ScaleLockConfig(BaseModel):

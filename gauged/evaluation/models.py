@@ -21,9 +21,9 @@ import numpy as np
 from gauged.evaluation.timing import median_s
 from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.reader.detect import GaugeDetector
-from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL
+from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, model_path
 from gauged.reader.keypoints import decode_crop_maps
-from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path, to_model_input
+from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, to_model_input
 from gauged.types import StageFailure
 
 
@@ -86,10 +86,10 @@ def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000) -> dict:
             "unassigned_share": (predicted - matched) / max(1, predicted), "start_end_found": ends_found / max(1, ends)}
 
 
-def evaluate_models(data: Path, synth: Path | None, threads: int) -> dict:
-    crop = OnnxModel(packaged_model_path(CROP_MODEL), threads)
+def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Path | None = None) -> dict:
+    crop = OnnxModel(model_path(CROP_MODEL, models_dir), threads)
     try:
-        detector_model: OnnxModel | None = OnnxModel(packaged_model_path(DETECTOR_MODEL), threads)
+        detector_model: OnnxModel | None = OnnxModel(model_path(DETECTOR_MODEL, models_dir), threads)
     except ModelNotAvailable:
         detector_model = None  # reported as missing rather than failing the crop-model figures
     models = [m for m in (crop, detector_model) if m is not None]

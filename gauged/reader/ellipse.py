@@ -27,6 +27,7 @@ STAGE = "ellipse"
 REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends", "implausible_span",
            "numbers_outside_scale")
 
+TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
 OBLIQUE_AXIS_RATIO = 0.92  # b/a below this: about 23 degrees off-axis
 MIN_SPAN = np.radians(60.0)
 MAX_SPAN = np.radians(350.0)
@@ -180,7 +181,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     points = np.concatenate(parts).reshape(-1, 2)
     if len(points) < min_notches:
         return StageFailure(STAGE, "too_few_notches", f"{len(points)} notch points, need {min_notches}")
-    fitted = _robust_fit(points, tol_px=0.012 * crop_size)
+    fitted = _robust_fit(points, tol_px=TOLERANCE * crop_size)
     if isinstance(fitted, StageFailure):
         return fitted
     ellipse, inliers = fitted
@@ -188,7 +189,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     ends = np.zeros(len(points), bool)
     ends[len(keypoints.major.points):] = True
     if explained < max(min_notches, 0.6 * len(points)) or (ends.any() and not (inliers & ends).any()):
-        ellipse, inliers, explained = _scale_ring(points, ellipse, inliers, ends, 0.012 * crop_size, min_notches)
+        ellipse, inliers, explained = _scale_ring(points, ellipse, inliers, ends, TOLERANCE * crop_size, min_notches)
     if ellipse.b / ellipse.a < min_axis_ratio:
         return StageFailure(STAGE, "too_oblique", f"axis ratio {ellipse.b / ellipse.a:.2f} < {min_axis_ratio}")
     if explained < max(min_notches, 0.6 * len(points)):

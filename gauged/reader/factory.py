@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import logging
 
+from pathlib import Path
+
 from gauged.config.model import ReaderConfig
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path
@@ -15,14 +17,19 @@ CROP_MODEL = "crop.onnx"
 DETECTOR_MODEL = "detector.onnx"
 
 
+def model_path(name: str, models_dir: Path | None = None) -> Path:
+    """``models_dir/name`` when a folder is given (a candidate model), else the shipped file."""
+    return Path(models_dir) / name if models_dir is not None else packaged_model_path(name)
+
+
 def build_reader(config: ReaderConfig) -> GaugeReader:
     """The reader; raises :class:`ModelNotAvailable` when the crop model is missing.
 
     Without the detector model, gauges need an ROI, and a photo is read as one gauge filling it.
     """
-    crop = OnnxModel(packaged_model_path(CROP_MODEL), config.threads)
+    crop = OnnxModel(model_path(CROP_MODEL, config.models_dir), config.threads)
     try:
-        detector = GaugeDetector(OnnxModel(packaged_model_path(DETECTOR_MODEL), config.threads))
+        detector = GaugeDetector(OnnxModel(model_path(DETECTOR_MODEL, config.models_dir), config.threads))
     except ModelNotAvailable as exc:
         log.warning("%s; gauges without an roi cannot be found, photos are read as one gauge", exc)
         detector = None
