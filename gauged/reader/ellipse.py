@@ -13,10 +13,11 @@ its gap).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from gauged.geometry.angles import scale_span, wrap_angle
+from gauged.geometry.angles import scale_span, unwrap, wrap_angle, wrap_to_pi
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.ellipse_distance import orthogonal_distance
 from gauged.geometry.ellipse_fit import fit_circle, fit_ellipse, fit_ellipse_direct
@@ -55,6 +56,63 @@ class ScaleArc:
     @property
     def span(self) -> float:
         return scale_span(self.start_angle, self.end_angle)
+
+    @cached_property
+    def notch_grid(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(measured, even) unwrapped dial angles of the major notches, or None; see :meth:`linear`."""
+        if len(self.notches) == 0:
+            return None
+        angles = dial_angle(self.ellipse, self.notches, self.centre)
+        return notch_grid(unwrap(angles, self.zero_angle), float(unwrap(self.start_angle, self.zero_angle)),
+                          float(unwrap(self.end_angle, self.zero_angle)))
+
+    def linear(self, angle: float | np.ndarray) -> float | np.ndarray:
+        """Dial angle(s) corrected so that the major notches are evenly spaced between the ends.
+
+        The major notches of a linear scale are evenly spaced in value, but their fitted dial
+        angles are not quite even: an ellipse fitted to part of a ring, or perspective on a dial
+        whose pivot was not used, bends the angles by a degree or more (a percent of the reading).
+        Mapping angles piecewise-linearly from the measured notch angles to evenly spaced ones
+        reads the needle against its neighbouring notches, as a person does. Identity when the
+        notches do not form a regular grid (:func:`notch_grid`) and outside the scale.
+        """
+        grid = self.notch_grid
+        if grid is None:
+            return angle
+        u = unwrap(np.asarray(angle, float), self.zero_angle)
+        inside = (u >= grid[0][0]) & (u <= grid[0][-1])
+        corrected = np.where(inside, np.interp(u, grid[0], grid[1]), u)
+        out = wrap_to_pi(corrected)
+        return float(out) if np.ndim(angle) == 0 else np.asarray(out)
+
+
+GRID_TOLERANCE = 0.3  # of the notch step: how far a gap may be from a whole number of steps
+
+
+def notch_grid(notch_angles: np.ndarray, start: float, end: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Knots (measured, even) of the piecewise-linear angle correction of :meth:`ScaleArc.linear`.
+
+    ``notch_angles`` (N,), ``start`` and ``end`` are unwrapped dial angles (radians, start < end).
+    The notches between the ends (plus the ends) are sorted; the median gap is one step; every gap
+    must be within :data:`GRID_TOLERANCE` of a whole number of steps (a missed notch makes a gap
+    of two). The knots' even angles then run from ``start`` to ``end`` by equal steps. None when
+    the notches are too few (under 4 with the ends) or irregular (minor ticks or false peaks taken
+    for majors): the angles are then used as measured.
+    """
+    if not end > start:
+        return None
+    step_guess = (end - start) / 40.0  # notches closer than this are one notch seen twice
+    inside = np.sort(np.asarray(notch_angles, float)[(notch_angles > start + step_guess) & (notch_angles < end - step_guess)])
+    knots = np.concatenate([[start], inside, [end]])
+    knots = knots[np.concatenate([[True], np.diff(knots) > step_guess])]
+    if len(knots) < 4 or knots[-1] != end:
+        return None
+    gaps = np.diff(knots)
+    steps = np.rint(gaps / np.median(gaps))
+    if np.any(steps < 1) or np.any(np.abs(gaps / np.median(gaps) - steps) > GRID_TOLERANCE):
+        return None
+    even = start + (end - start) * np.concatenate([[0.0], np.cumsum(steps)]) / steps.sum()
+    return knots, even
 
 
 def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[Ellipse, np.ndarray] | StageFailure:

@@ -35,10 +35,11 @@ def read_value(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel, min_conf
     """
     start = scale.unwrap(arc.start_angle)
     end = scale.unwrap(arc.end_angle)
-    position = (scale.unwrap(needle.angle) - start) / (end - start)
+    angle = arc.linear(needle.angle)  # read against the neighbouring notches
+    position = (scale.unwrap(angle) - start) / (end - start)
     if not -margin <= position <= 1 + margin:
         return StageFailure(STAGE, "needle_off_scale", f"needle at {position:+.0%} of the scale span")
-    value = float(scale.value_at(needle.angle))
+    value = float(scale.value_at(angle))
     confidence = _confidence(needle, arc, scale)
     if confidence < min_confidence:
         return StageFailure(STAGE, "low_confidence", f"confidence {confidence:.2f} < {min_confidence:g}")

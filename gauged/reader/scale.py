@@ -13,9 +13,11 @@ notch to ``max`` at the end notch, no OCR needed.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 from gauged.geometry.angles import unwrap
-from gauged.geometry.scale_fit import fit_scale_model, split_markers
+from gauged.geometry.dial_frame import dial_angle
+from gauged.geometry.scale_fit import fit_scale_model, marker_centres, split_markers
 from gauged.reader.ellipse import ScaleArc
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
@@ -38,6 +40,9 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
     A scale must have ``min_inliers`` consistent numbers and increase clockwise. Returns the failure of
     the larger group when no group yields a scale.
     """
+    # Number angles in the same corrected frame as the needle's (ScaleArc.linear).
+    markers = [replace(m, angle=float(arc.linear(dial_angle(arc.ellipse, marker_centres([m]), arc.centre)[0])))
+               for m in markers]
     groups = sorted((g for g in split_markers(arc.ellipse, list(markers)) if g), key=len, reverse=True)
     if not groups:
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from gauged.geometry.angles import angle_difference
-from gauged.reader.ellipse import fit_scale_arc
+from gauged.geometry.angles import unwrap, wrap_angle
+from gauged.geometry.dial_frame import point_at_dial_angle
+from gauged.reader.ellipse import ScaleArc, fit_scale_arc, notch_grid
 from gauged.types import Ellipse
 
 from .dial_maps import CROP, Dial, keypoints_for
@@ -113,3 +115,44 @@ def test_fit_scale_arc_on_a_dial_with_two_scales_takes_the_ring_with_the_ends(in
     assert abs(arc.ellipse.a - 100) < 0.5 and abs(arc.ellipse.b - 92) < 0.5
     assert abs(angle_difference(arc.start_angle, outer.start)) < math.radians(0.5)
     assert abs(angle_difference(arc.end_angle, outer.end)) < math.radians(0.5)
+
+
+def _distorted(even: np.ndarray) -> np.ndarray:
+    """Notch angles bent smoothly (by up to ~2 degrees), as a slightly wrong ellipse bends them."""
+    return even + math.radians(2.0) * np.sin((even - even[0]) / (even[-1] - even[0]) * math.pi)
+
+
+def test_notch_grid_maps_bent_notch_angles_back_to_even_steps():
+    even = np.linspace(1.0, 1.0 + math.radians(270), 11)
+    measured = _distorted(even)
+    knots, target = notch_grid(measured[1:-1], measured[0], measured[-1])
+    assert np.allclose(knots, measured) and np.allclose(target, np.linspace(measured[0], measured[-1], 11))
+
+
+def test_notch_grid_bridges_a_missed_notch():
+    even = np.linspace(0.0, math.radians(240), 9)
+    kept = np.delete(even, 4)[1:-1]  # the middle notch was not detected: one gap of two steps
+    knots, target = notch_grid(kept, even[0], even[-1])
+    assert np.allclose(target, np.delete(even, 4))
+
+
+@pytest.mark.parametrize("extra", [math.radians(15.0), math.radians(40.0)])
+def test_notch_grid_refuses_irregular_notches(extra):
+    even = np.linspace(0.0, math.radians(240), 9)  # steps of 30 degrees
+    notches = np.sort(np.append(even[1:-1], extra))  # a false peak half a step (or a third) off the grid
+    assert notch_grid(notches, even[0], even[-1]) is None
+
+
+def test_scale_arc_linear_reads_a_needle_on_a_bent_notch_at_its_true_place():
+    e = Ellipse(128, 128, 100, 100, 0)
+    start, span = math.radians(135), math.radians(270)
+    even = start + np.linspace(0, span, 11)
+    measured = _distorted(even)
+    notches = point_at_dial_angle(e, measured)
+    arc = ScaleArc(e, e.center, float(measured[0]), float(measured[-1]), wrap_angle(measured[0], measured[-1]),
+                   notches, 0.0, False)
+    for k in (2, 5, 7):  # the needle on the k-th notch reads k steps of the scale
+        corrected = unwrap(arc.linear(float(measured[k])), arc.zero_angle)
+        assert corrected == pytest.approx(unwrap(measured[0], arc.zero_angle) + k * (measured[-1] - measured[0]) / 10, abs=1e-9)
+    outside = float(measured[0]) - 0.2
+    assert arc.linear(outside) == pytest.approx(outside)
