@@ -194,7 +194,7 @@ def check_accuracy(received: Received, sent: list[tuple[int, dict]], flavour: st
         where = f"{gauge} ({flavour}): errors {np.round(100 * errors, 2).tolist()} %, {len(refused)} refused"
         print(f"{gauge:<16} {flavour:<8} {len(errors)}/{len(sent)} read, error of span: median "
               f"{100 * np.median(errors):.2f}%, max {100 * errors.max():.2f}%, "
-              f"{100 * np.mean(errors <= MAX_MEDIAN_ERROR):.0f}% within 2%")
+              f"{100 * np.mean(errors <= MAX_ERROR):.0f}% within 2%")
         assert len(errors) >= MIN_READ_FRACTION * len(sent), where
         assert np.median(errors) <= MAX_MEDIAN_ERROR, where
         assert errors.max() <= MAX_ERROR, where
