@@ -52,7 +52,8 @@ def record(image: str, index: int, read: GaugeRead | None, failure: StageFailure
     """The JSON line of one gauge (the contract of ``--json``)."""
     scale = read.scale if read is not None else None
     value = read.value if read is not None else None
-    failure = failure or (read.failure if read is not None else None)
+    if failure is None and read is not None:  # StageFailure is falsy: never `failure or ...`
+        failure = read.failure
     return {
         "image": image,
         "gauge": index,

@@ -86,6 +86,28 @@ class ScaleArc:
         return float(out) if np.ndim(angle) == 0 else np.asarray(out)
 
 
+GAP_NUMBERS = 2  # confident number peaks in the gap that mean the ends are wrong
+NUMBER_BAND = (0.55, 1.45)  # normalised radii where scale numbers sit
+NUMBER_SCORE = 0.5
+
+
+def _numbers_in_gap(keypoints: CropKeypoints, ellipse: Ellipse, centre, start: float, span: float) -> int:
+    """How many confident number peaks near the scale ring lie in the gap between the scale ends.
+
+    Scale numbers sit beside the scale, never in its gap: several there mean the ends are wrong
+    (typically notches the model missed made a false gap). One alone is more often the accuracy
+    class or a maker's mark printed in the gap, and peaks far from the ring are not scale numbers.
+    """
+    numbers = keypoints.numbers
+    if not len(numbers):
+        return 0
+    margin = np.radians(12.0)
+    radius = normalized_radius(ellipse, numbers.points)
+    near = (radius >= NUMBER_BAND[0]) & (radius <= NUMBER_BAND[1]) & (numbers.scores >= NUMBER_SCORE)
+    offset = np.mod(dial_angle(ellipse, numbers.points, centre) - start, 2 * np.pi)  # 0 at start, span at end
+    return int((near & (offset > span + margin) & (offset < 2 * np.pi - margin)).sum())
+
+
 GRID_TOLERANCE = 0.3  # of the notch step: how far a gap may be from a whole number of steps
 
 
@@ -280,14 +302,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     span = scale_span(start, end)
     if not MIN_SPAN <= span <= MAX_SPAN:
         return StageFailure(STAGE, "implausible_span", f"scale spans {np.degrees(span):.0f} degrees")
-    if len(keypoints.numbers):
-        # Scale numbers sit beside the scale, never in its gap: numbers there mean the ends are wrong
-        # (typically notches the model missed made a false gap).
-        margin = np.radians(12.0)
-        angles = dial_angle(ellipse, keypoints.numbers.points, centre)
-        offset = np.mod(angles - start, 2 * np.pi)  # 0 at the start, span at the end
-        outside = (offset > span + margin) & (offset < 2 * np.pi - margin)
-        if outside.any():
-            return StageFailure(STAGE, "numbers_outside_scale",
-                                f"{int(outside.sum())} scale number(s) lie in the gap between the scale ends")
+    in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span)
+    if in_gap >= GAP_NUMBERS:
+        return StageFailure(STAGE, "numbers_outside_scale", f"{in_gap} scale numbers lie in the gap between the scale ends")
     return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred)
