@@ -27,6 +27,13 @@ from gauged.reader.scale import fit_scales, scale_from_prior
 from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
 
 
+CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
+
+
+def _area(box: Box) -> float:
+    return max(0.0, box[2] - box[0]) * max(0.0, box[3] - box[1])
+
+
 class ScaleTextReader(Protocol):
     """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.ocr`)."""
 
@@ -105,14 +112,20 @@ class GaugeReader:
                    primary_unit: str | None = None) -> list[GaugeRead] | StageFailure:
         """Detect every gauge in (H, W, 3) uint8 BGR ``image`` and read each, best detection first.
 
-        Without a detector the whole image is read as one gauge (a photo cropped to the dial).
+        Without a detector the whole image is read as one gauge (a photo cropped to the dial); so is
+        a close-up, where a detection covers :data:`CLOSE_UP` of the image or more.
         """
         if self.detector is None:
             height, width = image.shape[:2]
             return [self.read_box(image, (0.0, 0.0, float(width), float(height)), 1.0, known, primary_unit)]
         detections = self.detector.detect(image)
+        height, width = image.shape[:2]
+        whole = (0.0, 0.0, float(width), float(height))
         if isinstance(detections, StageFailure):
             return detections
+        if any(_area(d.box) >= CLOSE_UP * width * height for d in detections):
+            # A close-up photo of one dial (the detector learnt dials in scenes): the photo is the gauge.
+            return [self.read_box(image, whole, max(d.score for d in detections), known, primary_unit)]
         return [self.read_box(image, d.box, d.score, known, primary_unit) for d in detections]
 
     def read_box(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
