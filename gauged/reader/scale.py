@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
+import numpy as np
+
 from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import dial_angle
 from gauged.geometry.scale_fit import fit_scale_model, marker_centres, split_markers
@@ -22,7 +24,8 @@ from gauged.reader.ellipse import ScaleArc
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
-REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers")
+REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered")
+COVER_STEPS = 1.5  # the read numbers must reach within this many number steps of both scale ends
 
 
 def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: str | None) -> ScaleModel:
@@ -58,8 +61,32 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
             first_failure = first_failure or StageFailure(
                 STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
             continue
+        uncovered = _uncovered(model)
+        if uncovered is not None:
+            first_failure = first_failure or uncovered
+            continue
         scales.append(model)
     if not scales:
         assert first_failure is not None
         return first_failure
     return sorted(scales, key=lambda s: s.inliers, reverse=True)
+
+
+def _uncovered(model: ScaleModel) -> StageFailure | None:
+    """A failure when the consistent numbers leave an end of the scale far from any of them.
+
+    Printed numbers run from one end of a scale to the other, so the values the fit gives at the two
+    end notches lie within a number step or so of a read number. When they do not, the ends or the
+    numbers are wrong (a false gap taken for the scale's, misread digits that happen to agree):
+    extrapolating would answer with a wild value, so the scale is refused instead.
+    """
+    values = sorted({m.value for m in model.markers if m.inlier})
+    if len(values) < 2:
+        return None
+    step = float(np.median(np.diff(values)))
+    low_gap, high_gap = values[0] - model.min_value, model.max_value - values[-1]
+    if max(low_gap, high_gap) > COVER_STEPS * step:
+        return StageFailure(STAGE, "scale_not_covered",
+                            f"numbers {values[0]:g}..{values[-1]:g} (step {step:g}) do not reach the scale ends "
+                            f"{model.min_value:.4g}..{model.max_value:.4g}")
+    return None

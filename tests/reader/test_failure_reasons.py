@@ -12,6 +12,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from gauged.config.model import GaugeConfig, ScaleLockConfig
 from gauged.gauge_runner import GaugeRunner
@@ -200,6 +201,20 @@ def test_reading_low_confidence_on_scattered_numbers_and_a_weak_needle():
     clean = fit_scales(arc, consistent)[0]
     assert isinstance(read_value(weak, arc, clean), Value)
     assert isinstance(read_value(fit_needle(needle_prob(dial), STRIDE, arc), arc, scales[0]), Value)
+
+
+def test_scale_not_covered_when_consistent_numbers_leave_an_end_far_away():
+    """Three agreeing numbers bunched at the start (2, 3, 4 of a 0..10 dial): extrapolating to the far
+    end would be a guess, so the scale is refused; missing only the end numbers is fine."""
+    dial = Dial()
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    bunched = [_marker(dial, dial.start_deg + k * step, k) for k in (2, 3, 4)]
+    assert_failure(fit_scales(arc, bunched), "scale", "scale_not_covered")
+    without_ends = [_marker(dial, dial.start_deg + k * step, k) for k in (1, 3, 5, 7, 9)]
+    scales = fit_scales(arc, without_ends)
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].min_value == pytest.approx(0, abs=0.05) and scales[0].max_value == pytest.approx(10, abs=0.05)
 
 
 # coverage ----------------------------------------------------------------------------------------
