@@ -132,4 +132,8 @@ def format_table(result: dict) -> str:
     reasons = result["all"]["failures_by_reason"]
     if reasons:
         lines.append("failures: " + ", ".join(f"{k} {v}" for k, v in reasons.items()))
+    worst = sorted((i for i in result["images"] if i["relative_error"] is not None), key=lambda i: -i["relative_error"])
+    if worst:
+        lines.append("largest errors: " + ", ".join(f"{i['image']} {i['relative_error']:.1%} (read {i['value']:.4g}, "
+                                                    f"true {i['truth']:g})" for i in worst[:3]))
     return "\n".join(lines)

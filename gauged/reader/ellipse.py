@@ -86,7 +86,7 @@ class ScaleArc:
         return float(out) if np.ndim(angle) == 0 else np.asarray(out)
 
 
-GAP_NUMBERS = 2  # confident number peaks in the gap that mean the ends are wrong
+GAP_NUMBERS = 2  # confident number peaks in the gap that mean found ends are wrong (1 for inferred ends)
 NUMBER_BAND = (0.55, 1.45)  # normalised radii where scale numbers sit
 NUMBER_SCORE = 0.5
 
@@ -303,6 +303,8 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     if not MIN_SPAN <= span <= MAX_SPAN:
         return StageFailure(STAGE, "implausible_span", f"scale spans {np.degrees(span):.0f} degrees")
     in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span)
-    if in_gap >= GAP_NUMBERS:
+    # Ends inferred from the largest gap between notches are only a guess (missed notches make a
+    # gap too): then a single number in that gap refutes it.
+    if in_gap >= (1 if inferred else GAP_NUMBERS):
         return StageFailure(STAGE, "numbers_outside_scale", f"{in_gap} scale numbers lie in the gap between the scale ends")
     return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred)

@@ -9,7 +9,7 @@ from gauged.geometry.angles import angle_difference
 from gauged.geometry.angles import unwrap, wrap_angle
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.ellipse import ScaleArc, fit_scale_arc, notch_grid
-from gauged.types import Ellipse
+from gauged.types import Ellipse, StageFailure
 
 from .dial_maps import CROP, Dial, keypoints_for
 
@@ -156,3 +156,28 @@ def test_scale_arc_linear_reads_a_needle_on_a_bent_notch_at_its_true_place():
         assert corrected == pytest.approx(unwrap(measured[0], arc.zero_angle) + k * (measured[-1] - measured[0]) / 10, abs=1e-9)
     outside = float(measured[0]) - 0.2
     assert arc.linear(outside) == pytest.approx(outside)
+
+
+def _with_numbers(keypoints, points, score=0.8):
+    from dataclasses import replace
+
+    from gauged.reader.keypoints import Peaks
+
+    pts = np.asarray(points, float).reshape(-1, 2)
+    return replace(keypoints, numbers=Peaks(pts, np.full(len(pts), score)))
+
+
+def test_one_number_in_the_gap_refutes_inferred_ends_but_not_found_ones():
+    """Missed notches make a gap too: when the ends are only inferred from the largest gap, a single
+    scale number in it says the guess is wrong; with found end notches one stray mark is tolerated."""
+    dial = Dial(start_deg=135, span_deg=270)
+    in_gap = point_at_dial_angle(dial.ellipse.scaled(0.8), math.radians(90.0))  # bottom, between the ends
+    inferred = fit_scale_arc(_with_numbers(keypoints_for(dial, start=False, end=False), in_gap), CROP)
+    assert isinstance(inferred, StageFailure) and inferred.reason == "numbers_outside_scale"
+    found = fit_scale_arc(_with_numbers(keypoints_for(dial), in_gap), CROP)
+    assert not isinstance(found, StageFailure), found
+    two = point_at_dial_angle(dial.ellipse.scaled(0.8), np.radians([80.0, 100.0]))
+    refused = fit_scale_arc(_with_numbers(keypoints_for(dial), two), CROP)
+    assert isinstance(refused, StageFailure) and refused.reason == "numbers_outside_scale"
+    far = point_at_dial_angle(dial.ellipse.scaled(0.2), np.radians([80.0, 100.0]))  # a maker's mark near the hub
+    assert not isinstance(fit_scale_arc(_with_numbers(keypoints_for(dial), far), CROP), StageFailure)
