@@ -91,7 +91,8 @@ NUMBER_BAND = (0.55, 1.45)  # normalised radii where scale numbers sit
 NUMBER_SCORE = 0.5
 
 
-def _numbers_in_gap(keypoints: CropKeypoints, ellipse: Ellipse, centre, start: float, span: float) -> int:
+def _numbers_in_gap(keypoints: CropKeypoints, ellipse: Ellipse, centre, start: float, span: float,
+                    min_score: float = NUMBER_SCORE) -> int:
     """How many confident number peaks near the scale ring lie in the gap between the scale ends.
 
     Scale numbers sit beside the scale, never in its gap: several there mean the ends are wrong
@@ -103,7 +104,7 @@ def _numbers_in_gap(keypoints: CropKeypoints, ellipse: Ellipse, centre, start: f
         return 0
     margin = np.radians(12.0)
     radius = normalized_radius(ellipse, numbers.points)
-    near = (radius >= NUMBER_BAND[0]) & (radius <= NUMBER_BAND[1]) & (numbers.scores >= NUMBER_SCORE)
+    near = (radius >= NUMBER_BAND[0]) & (radius <= NUMBER_BAND[1]) & (numbers.scores >= min_score)
     offset = np.mod(dial_angle(ellipse, numbers.points, centre) - start, 2 * np.pi)  # 0 at start, span at end
     return int((near & (offset > span + margin) & (offset < 2 * np.pi - margin)).sum())
 
@@ -302,9 +303,9 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     span = scale_span(start, end)
     if not MIN_SPAN <= span <= MAX_SPAN:
         return StageFailure(STAGE, "implausible_span", f"scale spans {np.degrees(span):.0f} degrees")
-    in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span)
     # Ends inferred from the largest gap between notches are only a guess (missed notches make a
-    # gap too): then a single number in that gap refutes it.
+    # gap too): then a single number peak of any score in that gap refutes it.
+    in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span, 0.0 if inferred else NUMBER_SCORE)
     if in_gap >= (1 if inferred else GAP_NUMBERS):
         return StageFailure(STAGE, "numbers_outside_scale", f"{in_gap} scale numbers lie in the gap between the scale ends")
     return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred)
