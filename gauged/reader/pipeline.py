@@ -114,7 +114,8 @@ class GaugeReader:
 
         Without a detector the whole image is read as one gauge (a photo cropped to the dial); so is
         a close-up, where a detection covers :data:`CLOSE_UP` of the image or more, and an image
-        where the detector finds nothing (returning the detector's failure when that read fails too).
+        where the detector finds nothing (that read's failure is returned once it got as far as a scale
+        arc, i.e. there is a dial; before that, the detector's failure).
         """
         if self.detector is None:
             height, width = image.shape[:2]
@@ -126,7 +127,7 @@ class GaugeReader:
             # No dial found in the photo as a scene: it may be a close-up of one; the later stages
             # refuse honestly when it is not a dial at all (the detection failure is then reported).
             read = self.read_box(image, whole, 0.0, known, primary_unit)
-            return [read] if read.failure is None else detections
+            return [read] if read.failure is None or read.arc is not None else detections
         if any(_area(d.box) >= CLOSE_UP * width * height for d in detections):
             # A close-up photo of one dial (the detector learnt dials in scenes): the photo is the gauge.
             return [self.read_box(image, whole, max(d.score for d in detections), known, primary_unit)]
