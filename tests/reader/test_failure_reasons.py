@@ -63,6 +63,19 @@ class DialCropModel:
         return self.logits
 
 
+class BlankCropModel:
+    """Stand-in for the crop model on a crop with no dial: every map far below any threshold."""
+
+    input_size = CROP
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def __call__(self, image_rgb01: np.ndarray) -> np.ndarray:
+        self.calls += 1
+        return np.full((7, CROP // STRIDE, CROP // STRIDE), -8.0, np.float32)
+
+
 class BlankDetectorModel:
     """Stand-in for the detector model: CenterNet maps with no centre above any threshold."""
 
@@ -107,9 +120,16 @@ def test_detect_no_gauge_when_the_detector_finds_nothing():
     detector = GaugeDetector(BlankDetectorModel(), threshold=0.3)
     result = detector.detect(np.full((240, 320, 3), 128, np.uint8))
     assert_failure(result, "detect", "no_gauge")
-    # read_image hands the detector's failure on unchanged
-    reader = GaugeReader(DialCropModel(Dial()), detector=detector)
+    # read_image then tries the photo whole (a close-up); with no dial there either, it hands the
+    # detector's failure on unchanged
+    blank_crop = BlankCropModel()
+    reader = GaugeReader(blank_crop, detector=detector)
     assert_failure(reader.read_image(np.full((240, 320, 3), 128, np.uint8)), "detect", "no_gauge")
+    assert blank_crop.calls == 1
+    # when the whole photo does hold a dial, that read comes back with its own outcome
+    reads = GaugeReader(DialCropModel(Dial()), detector=detector).read_image(np.full((240, 320, 3), 128, np.uint8))
+    assert not isinstance(reads, StageFailure) and len(reads) == 1 and reads[0].arc is not None
+    assert_failure(reads[0].failure, "ocr", "ocr_unavailable")
 
 
 # crop --------------------------------------------------------------------------------------------
