@@ -1,0 +1,62 @@
+"""The shipped ONNX models on fixed renders they never trained on (seeds 5,000,000+): sane outputs.
+
+Not accuracy figures (those come from ``gauged eval models``, see gauged/models/README.md), but a
+guard that the files in the package load, take their inputs and find what is plainly there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gauged.evaluation.model_metrics import match_points
+from gauged.geometry.boxes import box_iou
+from gauged.reader.detect import GaugeDetector
+from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL
+from gauged.reader.keypoints import decode_crop_maps
+from gauged.reader.onnx_model import OnnxModel, packaged_model_path, to_model_input
+from gauged.synth.crop import render_crop
+from gauged.synth.scene import render_scene
+from gauged.training.prerender import synth_points
+from gauged.types import StageFailure
+
+SEEDS = (5_000_001, 5_000_002, 5_000_003, 5_000_004)
+
+
+def _model(name: str) -> OnnxModel:
+    path = packaged_model_path(name)
+    if not path.is_file():
+        pytest.skip(f"gauged/models/{name} is not shipped")
+    return OnnxModel(path, threads=1)
+
+
+def test_detector_finds_the_gauges_of_clean_scenes():
+    detector = GaugeDetector(_model(DETECTOR_MODEL))
+    found = labelled = 0
+    for seed in SEEDS:
+        scene = render_scene(seed, 1280, 720, n_gauges=2, clean=True)
+        detections = detector.detect(scene.image)
+        boxes = [] if isinstance(detections, StageFailure) else [d.box for d in detections]
+        for gauge in scene.record["gauges"]:
+            labelled += 1
+            found += any(box_iou(gauge["box"], b) >= 0.5 for b in boxes)
+    assert found >= 0.75 * labelled, f"{found} of {labelled} gauges found at IoU 0.5"
+
+
+def test_crop_model_finds_notches_ends_and_needle_of_clean_crops():
+    crop = _model(CROP_MODEL)
+    size = crop.input_size
+    recall, needle_ok = [], 0
+    for seed in SEEDS:
+        sample = render_crop(seed, size, clean=True)
+        points = synth_points(sample.truth)
+        logits = crop(to_model_input(sample.image))
+        assert logits.shape == (7, size // 2, size // 2) and np.isfinite(logits).all()
+        keypoints = decode_crop_maps(logits, size, require_notches=False)
+        match = match_points(keypoints.major.points, np.asarray(points["major"]).reshape(-1, 2), 8.0 * size / 448)
+        recall.append(match.matched / max(1, match.labelled))
+        truth_needle = sample.needle_mask[::2, ::2] == 1
+        predicted = logits[-1] > 0
+        needle_ok += (predicted & truth_needle).sum() >= 0.3 * truth_needle.sum()
+    assert np.mean(recall) >= 0.6, f"major-notch recall {recall}"
+    assert needle_ok >= len(SEEDS) - 1, f"needle found on {needle_ok} of {len(SEEDS)} crops"
