@@ -115,10 +115,7 @@ class ScaleTextReader:
         x0 = y0 = 0
         roi = image_bgr
         if circle is not None:
-            cx, cy, r = circle
-            half = RING[1] * r
-            x0, y0 = max(0, int(cx - half)), max(0, int(cy - half))
-            roi = image_bgr[y0: int(math.ceil(cy + half)), x0: int(math.ceil(cx + half))]
+            roi, x0, y0 = _square(image_bgr, circle[0], circle[1], RING[1] * circle[2])
         boxes: list[TextBox] = []
         if roi.size:
             quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
@@ -169,22 +166,19 @@ class ScaleTextReader:
                 continue
             if any(_explains(b, (hx, hy), 0.12 * r) for b in numbers + out):
                 continue
-            half = 0.5 * HINT_WINDOW * r
-            x0, y0 = max(0, int(hx - half)), max(0, int(hy - half))
-            win = image[y0: int(hy + half) + 1, x0: int(hx + half) + 1]
-            if win.shape[0] < 8 or win.shape[1] < 8:
+            window = _hint_window(image, hx, hy, r)
+            if window is None:
                 continue
+            win, x0, y0 = window
             side = int(min(320, max(160, 32 * round(max(win.shape[:2]) * 2 / 32))))
             quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(win, max_side=side)]
             quads = [q for q in quads if math.dist(q.mean(axis=0), (hx, hy)) < 0.25 * r]
             if quads:
                 quad = min(quads, key=lambda q: math.dist(q.mean(axis=0), (hx, hy)))
             else:  # faint or tiny print the detector misses: the ink around the point
-                box = ink_box(win, (hx - x0, hy - y0), r)
-                if box is None:
+                quad = _ink_quad(win, x0, y0, (hx, hy), r)
+                if quad is None:
                     continue
-                bx0, by0, bx1, by1 = box
-                quad = np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0])
             got = self._recognise(image, [quad], circle)
             out += [b for b in got if parse_number(b.text)]
         return out
@@ -193,28 +187,18 @@ class ScaleTextReader:
         """The quick pass: the ink blob at each hint (predicted number centre, px) recognised, all in
         one batch, no text detection. Returns the readings that parse as numbers."""
         r = circle[2]
-        half = 0.5 * HINT_WINDOW * r
         quads = []
         for hx, hy in np.asarray(hints, float).reshape(-1, 2):
-            if not _in_ring((hx, hy), circle):
-                continue
-            x0, y0 = max(0, int(hx - half)), max(0, int(hy - half))
-            win = image_bgr[y0: int(hy + half) + 1, x0: int(hx + half) + 1]
-            if win.shape[0] < 8 or win.shape[1] < 8:
-                continue
-            box = ink_box(win, (hx - x0, hy - y0), r)
-            if box is not None:
-                bx0, by0, bx1, by1 = box
-                quads.append(np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0]))
+            window = _hint_window(image_bgr, hx, hy, r) if _in_ring((hx, hy), circle) else None
+            quad = None if window is None else _ink_quad(*window, (hx, hy), r)
+            if quad is not None:
+                quads.append(quad)
         boxes = [b for b in self._recognise(image_bgr, quads, circle) if parse_number(b.text)]
         return _split_spaced(_dedupe(boxes))
 
     def read_unit_texts(self, image_bgr: np.ndarray, circle: Circle) -> list[TextBox]:
         """Texts on the face inside the scale (where units are printed), for after a quick pass."""
-        cx, cy, r = circle
-        half = UNIT_DISC * r
-        x0, y0 = max(0, int(cx - half)), max(0, int(cy - half))
-        roi = image_bgr[y0: int(math.ceil(cy + half)), x0: int(math.ceil(cx + half))]
+        roi, x0, y0 = _square(image_bgr, circle[0], circle[1], UNIT_DISC * circle[2])
         if not roi.size:
             return []
         quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=UNIT_DET_SIDE)]
@@ -357,6 +341,29 @@ def _tick_mark(box: TextBox, circle: Circle) -> bool:
     along = np.abs((q - np.array(circle[:2])) @ (c / max(dist, 1e-9)))
     straddles = along.min() <= circle[2] <= along.max()
     return straddles or abs(dist - circle[2]) < 0.03 * circle[2]
+
+
+def _square(image: np.ndarray, cx: float, cy: float, half: float) -> tuple[np.ndarray, int, int]:
+    """The part of ``image`` in the square of half-side ``half`` px about ``(cx, cy)``, and its origin."""
+    x0, y0 = max(0, int(cx - half)), max(0, int(cy - half))
+    return image[y0: int(math.ceil(cy + half)), x0: int(math.ceil(cx + half))], x0, y0
+
+
+def _hint_window(image: np.ndarray, hx: float, hy: float, r: float) -> tuple[np.ndarray, int, int] | None:
+    """The window of side :data:`HINT_WINDOW` radii around a hint, and its origin; None when tiny."""
+    half = 0.5 * HINT_WINDOW * r
+    x0, y0 = max(0, int(hx - half)), max(0, int(hy - half))
+    win = image[y0: int(hy + half) + 1, x0: int(hx + half) + 1]
+    return None if win.shape[0] < 8 or win.shape[1] < 8 else (win, x0, y0)
+
+
+def _ink_quad(win: np.ndarray, x0: int, y0: int, point: tuple[float, float], r: float) -> np.ndarray | None:
+    """The quad (image px) of the ink at ``point`` in a window whose origin is ``(x0, y0)``, or None."""
+    box = ink_box(win, (point[0] - x0, point[1] - y0), r)
+    if box is None:
+        return None
+    bx0, by0, bx1, by1 = box
+    return np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0])
 
 
 def _in_ring(p: tuple[float, float], circle: Circle) -> bool:

@@ -44,8 +44,10 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
     the larger group when no group yields a scale.
     """
     # Number angles in the same corrected frame as the needle's (ScaleArc.linear).
-    markers = [replace(m, angle=float(arc.linear(dial_angle(arc.ellipse, marker_centres([m]), arc.centre)[0])))
-               for m in markers]
+    markers = list(markers)
+    if markers:
+        angles = arc.linear(dial_angle(arc.ellipse, marker_centres(markers), arc.centre))
+        markers = [replace(m, angle=float(a)) for m, a in zip(markers, angles, strict=True)]
     groups = sorted((g for g in split_markers(arc.ellipse, list(markers)) if g), key=len, reverse=True)
     if not groups:
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")

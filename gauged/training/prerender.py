@@ -84,16 +84,13 @@ def _in_pool(render, jobs: list[tuple[int, int]], what: str, chunksize: int, wor
             yield sample
 
 
-def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[CropSample]:
-    """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order."""
+def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int = 2,
+                           engine: str = "synth") -> Iterator[CropSample]:
+    """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order: ``engine``
+    "synth" is the full :mod:`gauged.synth` engine, "dial" the simple training renderer."""
     jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
-    return _in_pool(_render_one, jobs, "crops", 16, workers)
-
-
-def synth_engine_crop_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[CropSample]:
-    """Crops of the full synthetic engine for seeds ``first_seed ..``, in seed order."""
-    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
-    return _in_pool(_render_synth_one, jobs, "synth crops", 16, workers)
+    render = _render_synth_one if engine == "synth" else _render_one
+    return _in_pool(render, jobs, f"{engine} crops", 16, workers)
 
 
 def _render_scene(args: tuple[int, int]) -> DetectorSample:
@@ -142,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
         written = write_crop_shard(args.out, real_needle_samples(args.root, args.split, args.size), count, args.size)
         log.info("wrote %d needle photos to %s", written, args.out)
     elif args.what == "crops":
-        samples = (synth_engine_crop_samples if args.engine == "synth" else synthetic_crop_samples)(args.seed, args.count, args.size)
+        samples = synthetic_crop_samples(args.seed, args.count, args.size, engine=args.engine)
         written = write_crop_shard(args.out, samples, args.count, args.size)
         log.info("wrote %d synthetic crops to %s", written, args.out)
     elif args.what == "scenes":
