@@ -37,8 +37,7 @@ from gauged.geometry.scale_fit import (
     fit_angle_value,
     fit_scale_model,
     marker_centres,
-    split_by_ellipse,
-    split_markers,
+    number_rings,
 )
 
 __all__ = [
@@ -76,8 +75,7 @@ __all__ = [
     "rms_orthogonal_distance",
     "scale_span",
     "select_circle_or_ellipse",
-    "split_by_ellipse",
-    "split_markers",
+    "number_rings",
     "to_unit_circle",
     "unrectify_points",
     "unwrap",

@@ -157,21 +157,31 @@ def marker_centres(markers: Sequence[ScaleMarker]) -> np.ndarray:
     return np.stack([(boxes[:, 0] + boxes[:, 2]) / 2.0, (boxes[:, 1] + boxes[:, 3]) / 2.0], axis=1)
 
 
-def split_by_ellipse(ellipse: Ellipse, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Indices of points (N, 2) px inside and outside ``ellipse``: ``(inside (K,), outside (N-K,))`` int arrays.
+RING_GAP = 0.12  # normalised-radius gap that separates the numbers of two scales
 
-    For dials with two scales (bar inside the ring, psi outside, ...): each group is fitted on its own.
+
+def number_rings(ellipse: Ellipse, markers: Sequence[ScaleMarker], min_gap: float = RING_GAP,
+                 min_ring: int = 2) -> list[list[ScaleMarker]]:
+    """The markers grouped into rings of scale numbers, outermost first.
+
+    The numbers of one scale sit at about the same radius in the dial frame of ``ellipse``
+    (:func:`gauged.geometry.dial_frame.normalized_radius`); a dual-scale dial prints its second scale's
+    numbers on another radius. The markers are split at the widest gap between sorted radii when it
+    exceeds ``min_gap`` and leaves at least ``min_ring`` markers on each side; otherwise they form one
+    ring. (Splitting at the scale ellipse itself fails when both rings print inside it.)
     """
-    inside = normalized_radius(ellipse, points) < 1.0
-    return np.flatnonzero(inside), np.flatnonzero(~inside)
-
-
-def split_markers(ellipse: Ellipse, markers: Sequence[ScaleMarker]) -> tuple[list[ScaleMarker], list[ScaleMarker]]:
-    """Markers whose box centres lie inside and outside ``ellipse`` (:func:`split_by_ellipse`)."""
+    markers = list(markers)
     if not markers:
-        return [], []
-    inside, outside = split_by_ellipse(ellipse, marker_centres(markers))
-    return [markers[i] for i in inside], [markers[i] for i in outside]
+        return []
+    radius = normalized_radius(ellipse, marker_centres(markers))
+    order = np.argsort(-radius, kind="stable")
+    gaps = -np.diff(radius[order])
+    candidates = [k for k in range(len(gaps)) if min_ring <= k + 1 <= len(markers) - min_ring]
+    if candidates:
+        k = max(candidates, key=lambda i: gaps[i])
+        if gaps[k] > min_gap:
+            return [[markers[i] for i in sorted(order[:k + 1])], [markers[i] for i in sorted(order[k + 1:])]]
+    return [markers]
 
 
 def fit_scale_model(

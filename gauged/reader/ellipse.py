@@ -29,6 +29,7 @@ REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no
            "numbers_outside_scale")
 
 TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
+MIN_TRIALS = 40  # RANSAC hypotheses tried before the adaptive count may stop the search
 OBLIQUE_AXIS_RATIO = 0.92  # b/a below this: about 23 degrees off-axis
 MIN_SPAN = np.radians(60.0)
 MAX_SPAN = np.radians(350.0)
@@ -138,8 +139,12 @@ def notch_grid(notch_angles: np.ndarray, start: float, end: float) -> tuple[np.n
     return knots, even
 
 
-def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[Ellipse, np.ndarray] | StageFailure:
+def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 300) -> tuple[Ellipse, np.ndarray] | StageFailure:
     """RANSAC over 5-notch ellipse hypotheses (3-notch circles when fewer), then a refit on the inliers.
+
+    The number of hypotheses adapts to the best inlier share so far (99% chance of one all-inlier
+    sample, at least :data:`MIN_TRIALS`, at most ``trials``): a clean single ring stops early, a
+    dual-scale dial whose ring holds half the notches gets the hundred-odd samples it needs.
 
     False notch peaks (a screw head, a printed logo) pull a plain least-squares conic far off the
     ring, so the consensus set is found first. The sampling generator has a fixed seed: the same
@@ -153,8 +158,10 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[El
             return StageFailure(STAGE, ellipse.reason if ellipse.reason in REASONS else "degenerate_conic", ellipse.detail)
         return ellipse, np.ones(count, bool)
     rng = np.random.default_rng(0)
-    best_keep, best_cost = None, np.inf
-    for _ in range(trials):
+    best_keep, best_cost, needed = None, np.inf, trials
+    for trial in range(trials):
+        if trial >= max(MIN_TRIALS, needed):
+            break
         subset = points[rng.choice(count, sample, replace=False)]
         hypothesis = fit_ellipse_direct(subset) if sample == 5 else fit_circle(subset)
         if isinstance(hypothesis, StageFailure) or hypothesis.b < 0.2 * hypothesis.a:
@@ -164,6 +171,7 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[El
         cost = float(np.minimum(dist, tol_px).sum())  # MSAC (Torr & Zisserman 2000)
         if cost < best_cost:
             best_cost, best_keep = cost, dist <= tol_px
+            needed = _trials_needed(best_keep.mean(), sample, trials)
     if best_keep is None or best_keep.sum() < 3:
         return StageFailure(STAGE, "degenerate_conic", "no ellipse hypothesis from the notches")
     keep = best_keep
@@ -178,6 +186,16 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 60) -> tuple[El
     return ellipse, keep
 
 
+def _trials_needed(inlier_share: float, sample: int, cap: int) -> int:
+    """RANSAC samples for a 99% chance that one is all inliers (Fischler & Bolles 1981)."""
+    p_good = inlier_share ** sample
+    if p_good >= 1.0:
+        return 0
+    if p_good <= 0.0:
+        return cap
+    return min(cap, int(np.ceil(np.log(0.01) / np.log1p(-p_good))))
+
+
 CONCENTRIC = 0.06  # centres of two scale rings of one dial lie within this fraction of the outer radius
 
 
@@ -186,29 +204,81 @@ def _scale_ring(points: np.ndarray, ellipse: Ellipse, inliers: np.ndarray, ends:
     """The ring of the primary scale on a dial with two concentric scales (bar outside, psi inside).
 
     The major-notch map marks the notches of both scales, so the consensus of :func:`_robust_fit` may
-    hold only one ring. When the other notches form a second ring about the same centre, the scale
-    is the ring holding the start/end notches (``ends`` marks those points), else the outer one.
-    Otherwise the first fit is returned unchanged and the caller judges it. The third value is how
-    many notches the ring(s) explain.
+    hold only one ring. The other ring is looked for among the remaining notches, as the first ring
+    scaled about its centre (:func:`_concentric_ring`) or as a free ellipse; and since the first
+    consensus may be the worse-fitted ring (a short, noisy inner arc), also the other way round.
+    Of the pairs of concentric, separate rings the one explaining most notches wins, and the scale
+    is its ring holding the start/end notches (``ends`` marks those points), else the outer one.
+    Without such a pair the first fit is returned unchanged and the caller judges it. The third
+    value is how many notches the ring(s) explain.
     """
-    unchanged = ellipse, inliers, int(inliers.sum())
-    rest = np.flatnonzero(~inliers)
-    if len(rest) < min_notches:
-        return unchanged
-    second = _robust_fit(points[rest], tol_px)
-    if isinstance(second, StageFailure):
-        return unchanged
-    other, keep = second
-    other_inliers = np.zeros(len(points), bool)
-    other_inliers[rest[keep]] = True
-    outer = max(ellipse.a, other.a)
-    concentric = np.hypot(ellipse.cx - other.cx, ellipse.cy - other.cy) <= CONCENTRIC * outer
-    separate = abs(ellipse.a - other.a) > 2 * tol_px
-    if not (concentric and separate and other_inliers.sum() >= min_notches):
-        return unchanged
-    rings = [(ellipse, inliers), (other, other_inliers)]
-    rings.sort(key=lambda ring: (int((ring[1] & ends).sum()), ring[0].a), reverse=True)
-    return rings[0][0], rings[0][1], int(inliers.sum() + other_inliers.sum())
+    best: tuple[Ellipse, np.ndarray, int] = (ellipse, inliers, int(inliers.sum()))
+    for first, first_inliers, second in _ring_pairs(points, ellipse, inliers, tol_px, min_notches):
+        other, other_inliers = second
+        outer = max(first.a, other.a)
+        concentric = np.hypot(first.cx - other.cx, first.cy - other.cy) <= CONCENTRIC * outer
+        separate = abs(first.a - other.a) > 2 * tol_px
+        explained = int((first_inliers | other_inliers).sum())
+        if not (concentric and separate and other_inliers.sum() >= min_notches and explained > best[2]):
+            continue
+        rings = [(first, first_inliers), (other, other_inliers)]
+        rings.sort(key=lambda ring: (int((ring[1] & ends).sum()), ring[0].a), reverse=True)
+        best = rings[0][0], rings[0][1], explained
+    return best
+
+
+def _ring_pairs(points: np.ndarray, ellipse: Ellipse, inliers: np.ndarray, tol_px: float, min_notches: int):
+    """Candidate (first ring, its inliers, (second ring, its inliers)) pairs for :func:`_scale_ring`."""
+    def second_ring(ring: Ellipse, taken: np.ndarray) -> list[tuple[Ellipse, np.ndarray]]:
+        rest = np.flatnonzero(~taken)
+        if len(rest) < min_notches:
+            return []
+        found = []
+        for fit in (_concentric_ring(points[rest], ring, tol_px, min_notches), _robust_fit(points[rest], tol_px)):
+            if fit is not None and not isinstance(fit, StageFailure):
+                mask = np.zeros(len(points), bool)
+                mask[rest[fit[1]]] = True
+                found.append((fit[0], mask))
+        return found
+
+    for other, other_inliers in second_ring(ellipse, inliers):
+        yield ellipse, inliers, (other, other_inliers)
+        # the second ring may be the better-fitted one: find the first again as its scaled copy
+        for again in second_ring(other, other_inliers)[:1]:
+            yield other, other_inliers, again
+
+
+def _concentric_ring(points: np.ndarray, ellipse: Ellipse, tol_px: float,
+                     min_notches: int) -> tuple[Ellipse, np.ndarray] | None:
+    """A second scale ring among ``points``: the first ring scaled about its centre, or None.
+
+    The two rings of a dual-scale dial are concentric circles on one plane, so in the image the
+    second is the first ellipse scaled about (nearly) the same centre. Fitting it as a free ellipse
+    fails when its notches cover a short arc (a 0-50 inner scale on a quarter of the dial), so the
+    notches are grouped by their normalised radius in the first ring's frame: the largest group
+    within ``tol_px`` of one radius is the ring. It is refitted freely only when that refit stays
+    concentric and of the same shape (perspective shifts the inner ring's image slightly).
+    """
+    scale = float(np.sqrt(ellipse.a * ellipse.b))
+    rho = normalized_radius(ellipse, points)
+    members = np.abs(rho[:, None] - rho[None, :]) * scale <= tol_px
+    counts = members.sum(axis=1)
+    k = int(np.argmax(counts))
+    if counts[k] < min_notches:
+        return None
+    ratio = float(np.median(rho[members[k]]))
+    if abs(ratio - 1.0) * scale <= 2 * tol_px:
+        return None  # the same ring, not a second one
+    ring = Ellipse(ellipse.cx, ellipse.cy, ellipse.a * ratio, ellipse.b * ratio, ellipse.theta)
+    keep = np.abs(normalized_radius(ring, points) - 1.0) * scale * ratio <= tol_px
+    if keep.sum() >= 6:
+        refit = fit_ellipse(points[keep], shape="auto")
+        if (not isinstance(refit, StageFailure)
+                and np.hypot(refit.cx - ring.cx, refit.cy - ring.cy) <= CONCENTRIC * max(ellipse.a, ring.a)
+                and abs(refit.b / refit.a - ring.b / ring.a) <= 0.05 and abs(refit.a / ring.a - 1.0) <= 0.1):
+            ring = refit
+            keep = np.abs(orthogonal_distance(ring, points)) <= tol_px
+    return ring, keep
 
 
 GAP_CLEARLY_LARGER = 1.4  # the scale's gap must exceed the notch spacing by this factor to be recognised
@@ -276,7 +346,8 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     if explained < max(min_notches, 0.6 * len(points)):
         return StageFailure(STAGE, "poor_fit", f"only {explained} of {len(points)} notches lie on the scale ring(s)")
     rms = float(np.sqrt(np.mean(orthogonal_distance(ellipse, points[inliers]) ** 2)))
-    if rms > max_rms_fraction * ellipse.a:
+    # The notch peaks themselves are good to about a pixel, so a small ring gets an absolute floor.
+    if rms > max(max_rms_fraction * ellipse.a, 0.5 * TOLERANCE * crop_size):
         return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
     centre = ellipse.center
     # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame

@@ -50,6 +50,7 @@ TURNED_MIN_SCORE = 0.9  # a reading found only after turning the text must be th
 HINT_WINDOW = 0.6  # side of the local-detection window around a hint, in scale radii
 POLAR_BELOW = 4  # read the unwrapped ring too when the first pass gives fewer progression numbers
 QUICK_ENOUGH = 4  # numbers of one progression read at the hints alone that end the quick pass
+INNER_SCALE = 0.66  # scale radii: numbers nearer the centre are a secondary scale's (synthetic: main >= 0.69)
 UNIT_DISC = 0.95  # radius (scale radii) of the face region searched for the unit after a quick pass
 UNIT_DET_SIDE = 320  # text-detector input side for that region
 
@@ -213,7 +214,10 @@ class ScaleTextReader:
         if not self.quick or hints is None or len(hints) < QUICK_ENOUGH:
             return None
         numbers = self.read_at_hints(image_bgr, hints, circle)
-        if _progression_size(numbers, circle) < QUICK_ENOUGH:
+        # Numbers deep inside the ring belong to an inner, secondary scale: the main scale's numbers
+        # were not hinted, so only the full pass can find them.
+        near_ring = [t for t in numbers if math.dist(t.center, circle[:2]) >= INNER_SCALE * circle[2]]
+        if _progression_size(near_ring, circle) < QUICK_ENOUGH:
             return None
         return numbers + [t for t in self.read_unit_texts(image_bgr, circle) if match_unit(t.text)]
 
@@ -247,7 +251,7 @@ class ScaleTextReader:
         return out
 
     # -- the pipeline stage -------------------------------------------------------------------
-    def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray
+    def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
                      ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
         """Scale numbers (markers with boxes in ``crop`` pixels) and the unit of the crop's dial.
 
@@ -255,12 +259,18 @@ class ScaleTextReader:
         model's number centres (may be empty). With ``progression`` the markers are limited to up to
         two arithmetic progressions (:func:`gauged.reader.numbers.filter_progression`, one per
         concentric scale) when one is found; otherwise all parsed numbers are returned for the
-        scale stage's RANSAC. Failures: ``no_text``, ``no_numbers``.
+        scale stage's RANSAC. ``detail``, when given, is the same square region as ``crop`` at a higher
+        resolution (any size): the rectified view is sampled from it. Failures: ``no_text``,
+        ``no_numbers``.
         """
         size = RECTIFIED_SIZE
         radius = RECTIFIED_RADIUS * size
         matrix = rectifying_homography(arc.ellipse, arc.zero_angle, size, radius=radius, centre=arc.centre)
-        rectified = warp_rectified(crop, matrix, size)
+        if detail is None:
+            rectified = warp_rectified(crop, matrix, size)
+        else:  # detail px -> crop px is a pure scaling of the same square
+            to_crop = np.diag([crop.shape[1] / detail.shape[1], crop.shape[0] / detail.shape[0], 1.0])
+            rectified = warp_rectified(detail, matrix @ to_crop, size)
         circle = (size / 2.0, size / 2.0, radius)
         rhints = None
         if hints is not None and len(hints):
@@ -276,7 +286,11 @@ class ScaleTextReader:
             return StageFailure(STAGE, "no_numbers", f"{len(texts)} text(s) read, none a scale number: "
                                 + ", ".join(repr(t.text) for t in texts[:6]))
         if self.progression:
-            markers = keep_progressions(markers, circle)
+            kept = keep_progressions(markers, circle)
+            # Decimal numbers left out stay on as outliers: on a scale whose other numbers lost their
+            # decimal points they are the evidence (gauged.reader.scale, dropped_decimal_point).
+            taken = {id(m) for m in kept}
+            markers = kept + [m for m in markers if id(m) not in taken and _decimal(m.text)]
         out = []
         for m in markers:  # back to crop pixels: the box keeps its size around the mapped centre
             x0, y0, x1, y1 = m.box
@@ -313,6 +327,12 @@ def _progression_size(texts: list[TextBox], circle: Circle) -> int:
         return len(markers)
     fit = filter_progression(markers, radii=[_radius(m, circle) for m in markers])
     return len(fit.kept) if fit else 0
+
+
+def _decimal(text: str) -> bool:
+    """Whether a number's text shows a fractional part ("0.5", "1,6"; not "10" or "5.")."""
+    parsed = parse_number(text)
+    return bool(parsed) and parsed.value != round(parsed.value)
 
 
 def keep_progressions(markers: list[ScaleMarker], circle: Circle) -> list[ScaleMarker]:

@@ -27,6 +27,8 @@ from gauged.reader.scale import fit_scales, scale_from_prior
 from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
 
 
+DETAIL_SIZE = 640  # px: the largest square the OCR samples its rectified view from
+DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much more detail than the crop
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
 
 
@@ -37,8 +39,10 @@ def _area(box: Box) -> float:
 class ScaleTextReader(Protocol):
     """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.ocr`)."""
 
-    def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray) -> tuple[list[ScaleMarker], str | None] | StageFailure:
-        """Scale numbers (crop pixels, parsed values) and the unit, or a failure of stage ``ocr``."""
+    def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
+                     ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
+        """Scale numbers (crop pixels, parsed values) and the unit, or a failure of stage ``ocr``.
+        ``detail`` is the crop's region at a higher resolution, for the text to be read from."""
 
 
 @dataclass(frozen=True)
@@ -153,7 +157,7 @@ class GaugeReader:
             result.failure = needle
             return result
         result.needle = needle
-        scales = self._scales(crop, keypoints, arc, known, primary_unit, result, timer)
+        scales = self._scales(image, crop, keypoints, arc, known, primary_unit, result, timer)
         if isinstance(scales, StageFailure):
             result.failure = scales
             return result
@@ -191,6 +195,17 @@ class GaugeReader:
             result.value = value
         return result
 
+    def _detail(self, image: np.ndarray, crop: Crop) -> np.ndarray | None:
+        """The crop's square region at up to :data:`DETAIL_SIZE` px when the frame has that much more
+        detail than the model's crop: scale numbers are small, and OCR reads them far better from the
+        frame's own pixels than from the crop the model needed (often 2-4x smaller)."""
+        side = crop.box[2] - crop.box[0]
+        size = int(min(DETAIL_SIZE, side))
+        if size < DETAIL_GAIN * self.crop_size:
+            return None
+        detail = crop_gauge(image, crop.box, size, pad=0.0)
+        return None if isinstance(detail, StageFailure) else detail.image
+
     def _crop_and_keypoints(self, image: np.ndarray, box: Box, result: GaugeRead, timer: _Timer,
                             require_notches: bool) -> bool:
         """Crop and run the crop model into ``result``; False (with ``result.failure`` set) on failure."""
@@ -209,7 +224,7 @@ class GaugeReader:
         result.keypoints = keypoints
         return True
 
-    def _scales(self, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, known: KnownScale | None,
+    def _scales(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, known: KnownScale | None,
                 primary_unit: str | None, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | StageFailure:
         if known is not None:
             result.unit = known.unit
@@ -217,7 +232,7 @@ class GaugeReader:
         if self.ocr is None:
             return StageFailure("ocr", OCR_UNAVAILABLE, "no OCR engine and no configured scale")
         with timer("ocr"):
-            read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points)
+            read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points, self._detail(image, crop))
         if isinstance(read, StageFailure):
             return read
         markers, unit = read

@@ -3,8 +3,9 @@
 From OCR (Reitsma et al., Sec. 3.5-3.6): the centres of the recognised numbers are projected onto the
 scale ellipse, and a RANSAC line maps unwrapped dial angle to value
 (:func:`gauged.geometry.scale_fit.fit_scale_model`). Markers inside and outside the scale ellipse are
-fitted separately (dials with a bar and a psi scale); the primary scale is the configured unit's, else
-the one with more inliers.
+grouped by the radius they are printed at and fitted separately (dials with a bar and a psi scale); the
+primary scale is the configured unit's, else the outer one: a dual-scale dial prints its main scale
+outside, and answering with the inner scale's value would be a wrong reading in the wrong unit.
 
 From a prior (``scale: {min, max}`` in the config): the value runs linearly from ``min`` at the start
 notch to ``max`` at the end notch, no OCR needed.
@@ -19,12 +20,14 @@ import numpy as np
 
 from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import dial_angle
-from gauged.geometry.scale_fit import fit_scale_model, marker_centres, split_markers
+from gauged.geometry.scale_fit import fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
-REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered")
+REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered",
+           "dropped_decimal_point")
+DECIMAL_MATCH = 0.3  # of a number step: a decimal number x10 this close to the line betrays dropped points
 COVER_STEPS = 1.5  # the read numbers must reach within this many number steps of both scale ends
 
 
@@ -38,40 +41,42 @@ def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: st
 
 def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None = None,
                min_inliers: int = 3) -> list[ScaleModel] | StageFailure:
-    """Fit one scale per marker group (inside / outside the scale ellipse), best first.
+    """Fit one scale per ring of numbers (:func:`number_rings`), outer ring first.
 
-    A scale must have ``min_inliers`` consistent numbers and increase clockwise. Returns the failure of
-    the larger group when no group yields a scale.
+    A scale must have ``min_inliers`` consistent numbers, increase clockwise and reach both scale
+    ends. When the outer ring of a dual-scale dial yields no scale, its failure is returned even
+    if the inner ring fits: the inner scale is the secondary one.
     """
     # Number angles in the same corrected frame as the needle's (ScaleArc.linear).
     markers = list(markers)
     if markers:
         angles = arc.linear(dial_angle(arc.ellipse, marker_centres(markers), arc.centre))
         markers = [replace(m, angle=float(a)) for m, a in zip(markers, angles, strict=True)]
-    groups = sorted((g for g in split_markers(arc.ellipse, list(markers)) if g), key=len, reverse=True)
-    if not groups:
+    rings = number_rings(arc.ellipse, markers)
+    if not rings:
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")
     scales: list[ScaleModel] = []
-    first_failure: StageFailure | None = None
-    for group in groups:
-        model = fit_scale_model(arc.ellipse, group, arc.start_angle, arc.end_angle, unit=unit, centre=arc.centre,
-                                min_inliers=min(min_inliers, max(2, len(group))), expected_sign=1)
+    for index, ring in enumerate(rings):
+        model = _fit_ring(arc, ring, unit, min_inliers)
         if isinstance(model, StageFailure):
-            first_failure = first_failure or model
-            continue
-        if model.inliers < min_inliers:
-            first_failure = first_failure or StageFailure(
-                STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
-            continue
-        uncovered = _uncovered(model)
-        if uncovered is not None:
-            first_failure = first_failure or uncovered
+            if index == 0:
+                return model if len(rings) == 1 else replace(model, detail=f"outer scale: {model.detail}")
             continue
         scales.append(model)
-    if not scales:
-        assert first_failure is not None
-        return first_failure
-    return sorted(scales, key=lambda s: s.inliers, reverse=True)
+    return scales
+
+
+def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inliers: int) -> ScaleModel | StageFailure:
+    model = fit_scale_model(arc.ellipse, ring, arc.start_angle, arc.end_angle, unit=unit, centre=arc.centre,
+                            min_inliers=min(min_inliers, max(2, len(ring))), expected_sign=1)
+    if isinstance(model, StageFailure):
+        return model
+    if model.inliers < min_inliers:
+        return StageFailure(STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
+    failure = _uncovered(model)
+    if failure is None:
+        failure = _dropped_decimal_point(model)
+    return model if failure is None else failure
 
 
 def _uncovered(model: ScaleModel) -> StageFailure | None:
@@ -91,4 +96,28 @@ def _uncovered(model: ScaleModel) -> StageFailure | None:
         return StageFailure(STAGE, "scale_not_covered",
                             f"numbers {values[0]:g}..{values[-1]:g} (step {step:g}) do not reach the scale ends "
                             f"{model.min_value:.4g}..{model.max_value:.4g}")
+    return None
+
+
+def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:
+    """A failure when the agreeing numbers are whole but a decimal one on the same ring is them /10.
+
+    OCR that drops the "0." of a decimal scale's numbers ("0.2" read "2") yields whole numbers that
+    still agree on a line, and a reading ten times too large. When the same ring also holds a number
+    read with its decimals, and that number times 10 or 100 lies where the line puts it, the scale
+    is a decimal one read wrong: it is refused.
+    """
+    inliers = [m for m in model.markers if m.inlier]
+    if len(inliers) < 2 or any(m.value != round(m.value) for m in inliers):
+        return None
+    step = float(np.median(np.diff(sorted({m.value for m in inliers})))) if len(inliers) > 1 else 0.0
+    for marker in model.markers:
+        if marker.inlier or marker.angle is None or marker.value == round(marker.value):
+            continue
+        expected = model.value_at(marker.angle)
+        for factor in (10.0, 100.0):
+            if abs(marker.value * factor - expected) <= DECIMAL_MATCH * step:
+                return StageFailure(STAGE, "dropped_decimal_point",
+                                    f"whole numbers agree, but {marker.text!r} read where the line puts "
+                                    f"{expected:.3g}: the scale's decimal points were dropped")
     return None

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from gauged.geometry.angles import unwrap, wrap_angle, wrap_to_pi
 from gauged.geometry.dial_frame import point_at_dial_angle
-from gauged.geometry.scale_fit import fit_angle_value, fit_scale_model, split_by_ellipse, split_markers
+from gauged.geometry.scale_fit import fit_angle_value, fit_scale_model, number_rings
 from gauged.types import Ellipse, ScaleMarker, StageFailure
 
 ELLIPSE = Ellipse(320.0, 240.0, 150.0, 110.0, 0.4)
@@ -101,22 +101,38 @@ def test_fit_angle_value_random_sampling_is_seeded() -> None:
     assert a.slope == pytest.approx(3.0) and a.inliers.sum() == 48
 
 
-def test_split_by_ellipse_and_fit_two_scales() -> None:
+def test_number_rings_split_two_scales_outer_first_and_fit_each() -> None:
     start, end = math.radians(135.0), math.radians(45.0)
     bar = _markers(ELLIPSE, start, end, np.linspace(0.0, 10.0, 6), radius_fraction=0.8)
     psi = _markers(ELLIPSE, start, end, np.linspace(0.0, 145.0, 6), radius_fraction=1.15)
     mixed = [m for pair in zip(bar, psi, strict=True) for m in pair]
-    inside, outside = split_markers(ELLIPSE, mixed)
-    assert [m.value for m in inside] == [m.value for m in bar]
-    assert [m.value for m in outside] == [m.value for m in psi]
-    inner = fit_scale_model(ELLIPSE, inside, start, end, unit="bar")
-    outer = fit_scale_model(ELLIPSE, outside, start, end, unit="psi")
-    assert inner.max_value == pytest.approx(10.0) and outer.max_value == pytest.approx(145.0)
+    outer, inner = number_rings(ELLIPSE, mixed)
+    assert [m.value for m in outer] == [m.value for m in psi]
+    assert [m.value for m in inner] == [m.value for m in bar]
+    bar_scale = fit_scale_model(ELLIPSE, inner, start, end, unit="bar")
+    psi_scale = fit_scale_model(ELLIPSE, outer, start, end, unit="psi")
+    assert bar_scale.max_value == pytest.approx(10.0) and psi_scale.max_value == pytest.approx(145.0)
     needle = math.radians(270.0)
-    assert outer.value_at(needle) / inner.value_at(needle) == pytest.approx(14.5)
-    idx_in, idx_out = split_by_ellipse(ELLIPSE, np.array([ELLIPSE.center, (1000.0, 1000.0)]))
-    assert idx_in.tolist() == [0] and idx_out.tolist() == [1]
-    assert split_markers(ELLIPSE, []) == ([], [])
+    assert psi_scale.value_at(needle) / bar_scale.value_at(needle) == pytest.approx(14.5)
+
+
+def test_number_rings_both_inside_the_scale_ellipse() -> None:
+    """Both scales printed inside the notch ring: the split is by radius, not by the ellipse."""
+    start, end = math.radians(135.0), math.radians(45.0)
+    main = _markers(ELLIPSE, start, end, np.linspace(0.0, 60.0, 7), radius_fraction=0.85)
+    second = _markers(ELLIPSE, start, end, np.linspace(0.0, 8.0, 5), radius_fraction=0.55)
+    outer, inner = number_rings(ELLIPSE, second + main)
+    assert sorted(m.value for m in outer) == sorted(m.value for m in main)
+    assert sorted(m.value for m in inner) == sorted(m.value for m in second)
+
+
+def test_number_rings_one_ring_and_a_stray() -> None:
+    """A single stray number (a serial number) does not make a ring of its own."""
+    start, end = math.radians(135.0), math.radians(45.0)
+    main = _markers(ELLIPSE, start, end, np.linspace(0.0, 10.0, 6), radius_fraction=0.8)
+    stray = _markers(ELLIPSE, start, start, [952396.0], radius_fraction=0.3)
+    assert number_rings(ELLIPSE, main + stray) == [main + stray]
+    assert number_rings(ELLIPSE, []) == []
 
 
 def test_fit_scale_model_uses_given_marker_angles() -> None:

@@ -117,6 +117,22 @@ def test_fit_scale_arc_on_a_dial_with_two_scales_takes_the_ring_with_the_ends(in
     assert abs(angle_difference(arc.end_angle, outer.end)) < math.radians(0.5)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_fit_scale_arc_finds_an_inner_ring_on_a_short_arc(seed):
+    """An inner scale over a third of the dial (synthetic 000083) with a few stray peaks: a free
+    ellipse through those notches bends to the strays, but the inner ring is the outer one scaled
+    about its centre, so both rings explain their notches and the scale is the outer ring."""
+    outer = Dial(ellipse=Ellipse(121, 129, 73, 52, 0.31), majors=13, start_deg=135, span_deg=270)
+    inner = Dial(ellipse=Ellipse(121, 129, 41, 29.2, 0.31), majors=9, start_deg=150, span_deg=120)
+    rng = np.random.default_rng(seed)
+    strays = np.array([121, 129]) + rng.uniform(-30, 30, (4, 2))
+    notches = np.vstack([outer.notch_points(), inner.notch_points() + rng.normal(0, 0.8, (9, 2)), strays])
+    arc = fit_scale_arc(keypoints_for(outer, majors=notches, pivot=False), CROP)
+    assert arc, arc
+    assert abs(arc.ellipse.a - 73) < 0.5 and abs(arc.ellipse.b - 52) < 0.5
+    assert abs(angle_difference(arc.start_angle, outer.start)) < math.radians(0.5)
+
+
 def _distorted(even: np.ndarray) -> np.ndarray:
     """Notch angles bent smoothly (by up to ~2 degrees), as a slightly wrong ellipse bends them."""
     return even + math.radians(2.0) * np.sin((even - even[0]) / (even[-1] - even[0]) * math.pi)

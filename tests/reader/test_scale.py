@@ -1,0 +1,68 @@
+"""The scale stage on dual-scale dials: numbers grouped by the radius they are printed at, the outer
+ring is the primary scale, and an unreadable outer ring is refused rather than answered with the
+inner (secondary) scale's value."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from gauged.geometry.dial_frame import point_at_dial_angle
+from gauged.reader.ellipse import fit_scale_arc
+from gauged.reader.scale import fit_scales
+from gauged.types import ScaleMarker, StageFailure
+
+from .dial_maps import CROP, Dial, keypoints_for
+
+
+def _ring(dial: Dial, values: list[float], radius: float, steps: list[int] | None = None) -> list[ScaleMarker]:
+    """Numbers printed at ``radius`` of the scale ring, at the dial's major notches ``steps``."""
+    step = dial.span_deg / (len(values) - 1)
+    out = []
+    for k in steps if steps is not None else range(len(values)):
+        x, y = point_at_dial_angle(dial.ellipse.scaled(radius), math.radians(dial.start_deg + k * step))[0]
+        out.append(ScaleMarker(f"{values[k]:g}", float(values[k]), (x - 6, y - 5, x + 6, y + 5)))
+    return out
+
+
+DIAL = Dial()
+BAR = [float(v) for v in range(11)]  # 0..10 bar, outer
+PSI = [14.5 * v for v in range(11)]  # 0..145 psi, inner
+
+
+@pytest.mark.parametrize("outer_radius,inner_radius", [(1.15, 0.75), (0.9, 0.6)])
+def test_the_outer_ring_is_the_primary_scale(outer_radius, inner_radius):
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    markers = _ring(DIAL, PSI, inner_radius, [0, 2, 4, 6, 8, 10]) + _ring(DIAL, BAR, outer_radius, [0, 2, 4, 6, 8, 10])
+    scales = fit_scales(arc, markers)
+    assert not isinstance(scales, StageFailure), scales
+    assert [round(s.max_value, 3) for s in scales] == [10.0, 145.0]
+
+
+def test_an_unreadable_outer_ring_is_refused_not_answered_with_the_inner_scale():
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    markers = _ring(DIAL, PSI, 0.6, [0, 2, 4, 6, 8, 10]) + _ring(DIAL, BAR, 1.15, [4, 6])
+    failure = fit_scales(arc, markers)
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "too_few_inliers")
+    assert failure.detail.startswith("outer scale:")
+    assert not isinstance(fit_scales(arc, markers[:6]), StageFailure)  # the inner ring alone is one scale
+
+
+def test_whole_numbers_with_a_decimal_one_on_their_line_are_a_dropped_decimal_point():
+    """A 0..1 MPa dial whose OCR dropped the "0." of most numbers (synthetic 000110): 2, 4, 6, 8 agree
+    on a line, but "0.5" sits where that line puts 5, so the scale is refused, not read 10x too high."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    values = [float(v) for v in range(11)]
+    whole = _ring(DIAL, values, 0.8, [0, 2, 4, 6, 8, 10])
+    (decimal,) = _ring(DIAL, values, 0.8, [5])
+    decimal = ScaleMarker("0.5", 0.5, decimal.box)
+    failure = fit_scales(arc, whole + [decimal])
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "dropped_decimal_point")
+    # a decimal elsewhere (an accuracy class "1.6" near the centre) is no such evidence
+    (centre,) = _ring(DIAL, values, 0.1, [7])
+    scales = fit_scales(arc, whole + [ScaleMarker("1.6", 1.6, centre.box)])
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].max_value == pytest.approx(10.0)
