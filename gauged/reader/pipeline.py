@@ -29,6 +29,7 @@ from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
 
 DETAIL_SIZE = 640  # px: the largest square the OCR samples its rectified view from
 DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much more detail than the crop
+GROW = 3.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
 
 
@@ -135,7 +136,22 @@ class GaugeReader:
         if any(_area(d.box) >= CLOSE_UP * width * height for d in detections):
             # A close-up photo of one dial (the detector learnt dials in scenes): the photo is the gauge.
             return [self.read_box(image, whole, max(d.score for d in detections), known, primary_unit)]
-        return [self.read_box(image, d.box, d.score, known, primary_unit) for d in detections]
+        return [self._read_detection(image, d.box, d.score, known, primary_unit) for d in detections]
+
+    def _read_detection(self, image: np.ndarray, box: Box, score: float, known: KnownScale | None,
+                        primary_unit: str | None) -> GaugeRead:
+        """Read a detection; when no scale ring is found in its box, read a box :data:`GROW` times
+        larger (clipped to the image) too: the detector sometimes boxes only the hub or the upper
+        face of a dial that fills the view, and then the ring lies outside the box."""
+        read = self.read_box(image, box, score, known, primary_unit)
+        if read.arc is not None or read.failure is None or read.failure.stage not in ("keypoints", "ellipse"):
+            return read
+        height, width = image.shape[:2]
+        cx, cy = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
+        half = GROW * max(box[2] - box[0], box[3] - box[1]) / 2
+        grown = (max(0.0, cx - half), max(0.0, cy - half), min(float(width), cx + half), min(float(height), cy + half))
+        wider = self.read_box(image, grown, score, known, primary_unit)
+        return wider if wider.arc is not None else read
 
     def read_box(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
                  primary_unit: str | None = None) -> GaugeRead:

@@ -55,6 +55,10 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
     rings = number_rings(arc.ellipse, markers)
     if not rings:
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")
+    if len(rings) == 2:
+        whole = _fit_ring(arc, markers, unit, min_inliers)
+        if not isinstance(whole, StageFailure) and _spans_both(whole, rings):
+            return [whole]  # one scale whose numbers only looked like two rings (a skewed ellipse)
     scales: list[ScaleModel] = []
     for index, ring in enumerate(rings):
         model = _fit_ring(arc, ring, unit, min_inliers)
@@ -64,6 +68,14 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
             continue
         scales.append(model)
     return scales
+
+
+def _spans_both(model: ScaleModel, rings: list[list[ScaleMarker]]) -> bool:
+    """Whether at least two agreeing numbers of ``model`` come from each of the two rings."""
+    outer = {m.box for m in rings[0]}
+    inlier_boxes = [m.box for m in model.markers if m.inlier]
+    from_outer = sum(box in outer for box in inlier_boxes)
+    return from_outer >= 2 and len(inlier_boxes) - from_outer >= 2
 
 
 def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inliers: int) -> ScaleModel | StageFailure:

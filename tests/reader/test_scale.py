@@ -66,3 +66,15 @@ def test_whole_numbers_with_a_decimal_one_on_their_line_are_a_dropped_decimal_po
     scales = fit_scales(arc, whole + [ScaleMarker("1.6", 1.6, centre.box)])
     assert not isinstance(scales, StageFailure), scales
     assert scales[0].max_value == pytest.approx(10.0)
+
+
+def test_one_scale_whose_numbers_look_like_two_rings_is_fitted_whole():
+    """A skewed ellipse puts one scale's numbers at two apparent radii (5 and 10 nearer the ring than
+    15 and 20): agreeing numbers from both groups make them one scale, not two too-small ones."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    values = [5.0 * v for v in range(6)]
+    markers = _ring(DIAL, values, 0.95, [1, 2]) + _ring(DIAL, values, 0.7, [3, 4])
+    scales = fit_scales(arc, markers)
+    assert not isinstance(scales, StageFailure), scales
+    assert len(scales) == 1 and scales[0].inliers == 4
+    assert scales[0].max_value == pytest.approx(25.0, abs=0.01)
