@@ -29,6 +29,8 @@ REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no
            "numbers_outside_scale")
 
 TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
+PIVOT_SURE = 0.5  # pivot peak score above which the pivot is trusted to check the ring
+PIVOT_OFF_CENTRE = 0.2  # radii; on 300 synthetic renders the true pivot is within 0.12 of the ring centre
 MIN_TRIALS = 40  # RANSAC hypotheses tried before the adaptive count may stop the search
 OBLIQUE_AXIS_RATIO = 0.92  # b/a below this: about 23 degrees off-axis
 MIN_SPAN = np.radians(60.0)
@@ -349,6 +351,10 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # The notch peaks themselves are good to about a pixel, so a small ring gets an absolute floor.
     if rms > max(max_rms_fraction * ellipse.a, 0.5 * TOLERANCE * crop_size):
         return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
+    if len(keypoints.pivot) and keypoints.pivot.scores[0] >= PIVOT_SURE:
+        off = float(normalized_radius(ellipse, keypoints.pivot.points[:1])[0])
+        if off > PIVOT_OFF_CENTRE:  # a ring through a few notches on one side, not around the dial
+            return StageFailure(STAGE, "poor_fit", f"the needle pivot lies {off:.2f} radii from the ring's centre")
     centre = ellipse.center
     # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame
     # through the pivot reads angles right; but a pixel of pivot error costs ~1 degree on a small

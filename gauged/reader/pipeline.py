@@ -29,7 +29,7 @@ from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
 
 DETAIL_SIZE = 640  # px: the largest square the OCR samples its rectified view from
 DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much more detail than the crop
-GROW = 3.0  # a detection whose box holds no scale ring is read again in a box this many times larger
+GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
 
 

@@ -26,7 +26,8 @@ from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
 REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered",
-           "dropped_decimal_point")
+           "dropped_decimal_point", "irregular_numbers")
+STEP_TOLERANCE = 0.1  # of the smallest step: differences of agreeing numbers must be whole multiples of it
 DECIMAL_MATCH = 0.3  # of a number step: a decimal number x10 this close to the line betrays dropped points
 COVER_STEPS = 1.5  # the read numbers must reach within this many number steps of both scale ends
 
@@ -85,10 +86,29 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
         return model
     if model.inliers < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
-    failure = _uncovered(model)
-    if failure is None:
-        failure = _dropped_decimal_point(model)
-    return model if failure is None else failure
+    for check in (_irregular, _uncovered, _dropped_decimal_point):
+        failure = check(model)
+        if failure is not None:
+            return failure
+    return model
+
+
+def _irregular(model: ScaleModel) -> StageFailure | None:
+    """A failure when the agreeing numbers are not steps of one progression (10, 150, 200).
+
+    Printed scale numbers step evenly, with some perhaps unread: every difference between two of
+    them is a whole multiple of the smallest. A misread number that happens to lie near the line
+    ("50" read "10") breaks that, and the line it bent is not the scale's.
+    """
+    values = np.unique([m.value for m in model.markers if m.inlier])
+    if len(values) < 3:
+        return None
+    diffs = np.diff(values)
+    multiples = diffs / diffs.min()
+    if np.abs(multiples - np.round(multiples)).max() > STEP_TOLERANCE:
+        return StageFailure(STAGE, "irregular_numbers",
+                            "agreeing numbers " + ", ".join(f"{v:g}" for v in values) + " are not steps of one progression")
+    return None
 
 
 def _uncovered(model: ScaleModel) -> StageFailure | None:

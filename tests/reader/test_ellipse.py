@@ -197,3 +197,20 @@ def test_one_number_in_the_gap_refutes_inferred_ends_but_not_found_ones():
     assert isinstance(refused, StageFailure) and refused.reason == "numbers_outside_scale"
     far = point_at_dial_angle(dial.ellipse.scaled(0.2), np.radians([80.0, 100.0]))  # a maker's mark near the hub
     assert not isinstance(fit_scale_arc(_with_numbers(keypoints_for(dial), far), CROP), StageFailure)
+
+
+def test_a_ring_whose_centre_is_far_from_the_needle_pivot_is_a_poor_fit():
+    """A confident pivot 0.3 radii from the fitted ring's centre: the ring passes through notches on
+    one side of the dial, not around it (synthetic 000287 came close), so it is refused."""
+    from dataclasses import replace
+
+    from gauged.reader.keypoints import Peaks
+
+    dial = Dial()
+    keypoints = keypoints_for(dial)
+    assert fit_scale_arc(keypoints, CROP)  # the pivot at the centre: read
+    off = np.array([[dial.ellipse.cx + 0.3 * dial.ellipse.a, dial.ellipse.cy]])
+    failure = fit_scale_arc(replace(keypoints, pivot=Peaks(off, np.array([0.9]))), CROP)
+    assert not failure and failure.reason == "poor_fit" and "pivot" in failure.detail
+    # an unsure pivot peak is no evidence
+    assert fit_scale_arc(replace(keypoints, pivot=Peaks(off, np.array([0.35]))), CROP)

@@ -78,3 +78,17 @@ def test_one_scale_whose_numbers_look_like_two_rings_is_fitted_whole():
     assert not isinstance(scales, StageFailure), scales
     assert len(scales) == 1 and scales[0].inliers == 4
     assert scales[0].max_value == pytest.approx(25.0, abs=0.01)
+
+
+def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
+    """10, 150, 200 of a 0..300 dial ("50" misread "10" near the line): the differences 140 and 50
+    are no multiples of one step, so the bent line is refused."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    values = [50.0 * v for v in range(7)]
+    x, y = point_at_dial_angle(DIAL.ellipse.scaled(0.8), math.radians(DIAL.start_deg + DIAL.span_deg * 10 / 300))[0]
+    ten = ScaleMarker("10", 10.0, (x - 6, y - 5, x + 6, y + 5))  # on the line: where 10 would be
+    failure = fit_scales(arc, [ten] + _ring(DIAL, values, 0.8, [3, 4, 6]))
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "irregular_numbers")
+    # unread numbers in between are fine: 50, 150, 200 are steps of 50
+    assert not isinstance(fit_scales(arc, _ring(DIAL, values, 0.8, [1, 3, 4, 6])), StageFailure)
