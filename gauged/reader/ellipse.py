@@ -20,6 +20,7 @@ import numpy as np
 from gauged.geometry.angles import scale_span, unwrap, wrap_angle, wrap_to_pi
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.ellipse_distance import orthogonal_distance
+from gauged.geometry.conic import conic_to_ellipse
 from gauged.geometry.ellipse_fit import fit_circle, fit_ellipse, fit_ellipse_direct
 from gauged.reader.keypoints import CropKeypoints
 from gauged.types import Ellipse, StageFailure
@@ -30,6 +31,8 @@ REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no
 
 TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
 PIVOT_SURE = 0.5  # pivot peak score above which the pivot is trusted to check the ring
+CIRCLE_UNLESS = 1.5  # a pivot-centred circle is kept unless its notch RMS exceeds the ellipse's this much (+0.5 px)
+SHORT_ARC = np.radians(150.0)  # notches covering less than this are fitted about a confident pivot
 PIVOT_OFF_CENTRE = 0.2  # radii; on 300 synthetic renders the true pivot is within 0.12 of the ring centre
 MIN_TRIALS = 40  # RANSAC hypotheses tried before the adaptive count may stop the search
 OBLIQUE_AXIS_RATIO = 0.92  # b/a below this: about 23 degrees off-axis
@@ -283,6 +286,53 @@ def _concentric_ring(points: np.ndarray, ellipse: Ellipse, tol_px: float,
     return ring, keep
 
 
+def _coverage(points: np.ndarray, centre: np.ndarray) -> float:
+    """The angle (radians) the points cover about ``centre``: a full turn less the largest gap."""
+    if len(points) < 2:
+        return 0.0
+    angles = np.sort(np.arctan2(points[:, 1] - centre[1], points[:, 0] - centre[0]))
+    gaps = np.diff(np.concatenate([angles, angles[:1] + 2 * np.pi]))
+    return float(2 * np.pi - gaps.max())
+
+
+def _centred_fit(points: np.ndarray, centre: np.ndarray, tol_px: float) -> tuple[Ellipse, np.ndarray] | None:
+    """The ring through ``points`` centred on ``centre`` (the needle pivot), with its inliers.
+
+    A centred conic ``A x^2 + B xy + C y^2 = 1`` is linear in its three coefficients; it is refitted
+    on the points within ``tol_px`` until stable. When the arc is too short for its shape to be
+    determined (not an ellipse, or flatter than 3:1) a circle about the centre is used. None when
+    fewer than four points stay on the ring.
+    """
+    rel = np.asarray(points, float) - centre
+    keep = np.ones(len(rel), bool)
+    ellipse = None
+    for _ in range(5):
+        if keep.sum() < 4:
+            return None
+        x, y = rel[keep].T
+        coef, *_ = np.linalg.lstsq(np.stack([x * x, x * y, y * y], axis=1), np.ones(len(x)), rcond=None)
+        conic = conic_to_ellipse(np.array([coef[0], coef[1], coef[2], 0.0, 0.0, -1.0]))
+        if isinstance(conic, StageFailure) or conic.b < 0.35 * conic.a:
+            radius = float(np.median(np.hypot(x, y)))
+            ellipse = Ellipse(float(centre[0]), float(centre[1]), radius, radius, 0.0)
+        else:
+            ellipse = Ellipse(float(centre[0]), float(centre[1]), conic.a, conic.b, conic.theta)
+        new_keep = np.abs(orthogonal_distance(ellipse, points)) <= tol_px
+        if np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+    if ellipse is None or keep.sum() < 4:
+        return None
+    # A short arc barely tells an ellipse from a circle: the circle wins unless clearly worse.
+    radius = float(np.median(np.hypot(*rel[keep].T)))
+    circle = Ellipse(float(centre[0]), float(centre[1]), radius, radius, 0.0)
+    rms = [float(np.sqrt(np.mean(orthogonal_distance(e, points[keep]) ** 2))) for e in (circle, ellipse)]
+    if rms[0] <= CIRCLE_UNLESS * rms[1] + 0.5:
+        ellipse = circle
+        keep = np.abs(orthogonal_distance(circle, points)) <= tol_px
+    return (ellipse, keep) if keep.sum() >= 4 else None
+
+
 GAP_CLEARLY_LARGER = 1.4  # the scale's gap must exceed the notch spacing by this factor to be recognised
 
 
@@ -343,6 +393,17 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     ends[len(keypoints.major.points):] = True
     if explained < max(min_notches, 0.6 * len(points)) or (ends.any() and not (inliers & ends).any()):
         ellipse, inliers, explained = _scale_ring(points, ellipse, inliers, ends, TOLERANCE * crop_size, min_notches)
+    if len(keypoints.pivot) and keypoints.pivot.scores[0] >= PIVOT_SURE:
+        pivot = keypoints.pivot.points[0]
+        off = float(normalized_radius(ellipse, pivot[None])[0])
+        if off > PIVOT_OFF_CENTRE or _coverage(points[inliers], pivot) < SHORT_ARC:
+            # A free ellipse through the notches of a short arc (a 90-degree sector scale) bends to
+            # any centre; the scale is centred on the needle's pivot, so it is fitted about that.
+            centred = _centred_fit(points, pivot, TOLERANCE * crop_size)
+            if centred is None:
+                return StageFailure(STAGE, "poor_fit", f"the needle pivot lies {off:.2f} radii from the ring's centre")
+            ellipse, inliers = centred
+            explained = int(inliers.sum())
     if ellipse.b / ellipse.a < min_axis_ratio:
         return StageFailure(STAGE, "too_oblique", f"axis ratio {ellipse.b / ellipse.a:.2f} < {min_axis_ratio}")
     if explained < max(min_notches, 0.6 * len(points)):
@@ -351,10 +412,6 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # The notch peaks themselves are good to about a pixel, so a small ring gets an absolute floor.
     if rms > max(max_rms_fraction * ellipse.a, 0.5 * TOLERANCE * crop_size):
         return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
-    if len(keypoints.pivot) and keypoints.pivot.scores[0] >= PIVOT_SURE:
-        off = float(normalized_radius(ellipse, keypoints.pivot.points[:1])[0])
-        if off > PIVOT_OFF_CENTRE:  # a ring through a few notches on one side, not around the dial
-            return StageFailure(STAGE, "poor_fit", f"the needle pivot lies {off:.2f} radii from the ring's centre")
     centre = ellipse.center
     # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame
     # through the pivot reads angles right; but a pixel of pivot error costs ~1 degree on a small

@@ -29,6 +29,7 @@ from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
 
 DETAIL_SIZE = 640  # px: the largest square the OCR samples its rectified view from
 DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much more detail than the crop
+NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
 
@@ -254,7 +255,8 @@ class GaugeReader:
         markers, unit = read
         result.markers, result.unit = markers, unit
         with timer("scale"):
-            scales = fit_scales(arc, markers, unit)
+            numbers = keypoints.numbers
+            scales = fit_scales(arc, markers, unit, hints=numbers.points[numbers.scores >= NUMBER_SURE])
         if isinstance(scales, StageFailure):
             return scales
         if primary_unit and len(scales) > 1:

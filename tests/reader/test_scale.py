@@ -92,3 +92,35 @@ def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
     assert (failure.stage, failure.reason) == ("scale", "irregular_numbers")
     # unread numbers in between are fine: 50, 150, 200 are steps of 50
     assert not isinstance(fit_scales(arc, _ring(DIAL, values, 0.8, [1, 3, 4, 6])), StageFailure)
+
+
+def _centres(dial: Dial, steps: list[int], radius: float = 0.8):
+    import numpy as np
+
+    step = dial.span_deg / (dial.majors - 1)
+    return np.vstack([point_at_dial_angle(dial.ellipse.scaled(radius), math.radians(dial.start_deg + k * step))
+                      for k in steps])
+
+
+def _at(dial: Dial, text: str, position: float) -> ScaleMarker:
+    """A number read at ``position`` major steps from the start notch (fractional: between numbers)."""
+    step = dial.span_deg / (dial.majors - 1)
+    x, y = point_at_dial_angle(dial.ellipse.scaled(0.8), math.radians(dial.start_deg + position * step))[0]
+    return ScaleMarker(text, float(text), (x - 6, y - 5, x + 6, y + 5))
+
+
+def test_printed_numbers_between_the_steps_of_the_read_ones_are_off_grid():
+    """Numbers are printed at all 11 majors of a 0..10 dial (the crop model's number centres). Misread
+    numbers 0, 1, 3, 4 that happen to lie on a line (at 0, 1.8, 5.4 and 7.2 major steps, as on the
+    synthetic vacuum dial 000212) put most printed numbers between the steps of that line: refused.
+    Reading every fourth number right (0, 4, 8) is fine."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    hints = _centres(DIAL, list(range(11)))
+    wrong = [_at(DIAL, text, position) for text, position in (("0", 0.0), ("1", 1.8), ("3", 5.4), ("4", 7.2))]
+    assert not isinstance(fit_scales(arc, wrong), StageFailure)  # without the number centres it passes
+    failure = fit_scales(arc, wrong, hints=hints)
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "numbers_off_grid")
+    right = fit_scales(arc, _ring(DIAL, BAR, 0.8, [0, 4, 8]), hints=hints)
+    assert not isinstance(right, StageFailure), right
+    assert right[0].max_value == pytest.approx(10.0)
