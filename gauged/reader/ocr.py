@@ -49,6 +49,7 @@ RECTIFIED_RADIUS = 0.34  # of RECTIFIED_SIZE: leaves room for numbers printed ou
 TURNED_MIN_SCORE = 0.9  # a reading found only after turning the text must be this confident
 HINT_WINDOW = 0.6  # side of the local-detection window around a hint, in scale radii
 POLAR_BELOW = 4  # read the unwrapped ring too when the first pass gives fewer progression numbers
+LOCAL_DETECTIONS = 2  # hints still unexplained after the ink reads that get a text detection of their own
 QUICK_ENOUGH = 4  # numbers of one progression read at the hints alone that end the quick pass
 INNER_SCALE = 0.66  # scale radii: numbers nearer the centre are a secondary scale's (synthetic: main >= 0.69)
 UNIT_DISC = 0.95  # radius (scale radii) of the face region searched for the unit after a quick pass
@@ -158,30 +159,34 @@ class ScaleTextReader:
         return box
 
     def _read_hints(self, image: np.ndarray, hints: np.ndarray, found: list[TextBox], circle: Circle) -> list[TextBox]:
-        """Local detection around each hint that no read number explains."""
+        """Read the numbers at hints that no read number explains: first the ink at each one, all
+        recognised in one batch; then, for up to :data:`LOCAL_DETECTIONS` hints still unexplained, a
+        text detection in a window around it (a detection costs as much as a dozen recognitions)."""
         r = circle[2]
         numbers = [b for b in found if parse_number(b.text)]
-        out: list[TextBox] = []
-        for hx, hy in hints:
-            if not _in_ring((hx, hy), circle):
-                continue
-            if any(_explains(b, (hx, hy), 0.12 * r) for b in numbers + out):
-                continue
+        pending = [(hx, hy) for hx, hy in hints
+                   if _in_ring((hx, hy), circle) and not any(_explains(b, (hx, hy), 0.12 * r) for b in numbers)]
+        if not pending:
+            return []
+        quads = []
+        for hx, hy in pending:
+            window = _hint_window(image, hx, hy, r)
+            quad = None if window is None else _ink_quad(*window, (hx, hy), r)
+            if quad is not None:
+                quads.append(quad)
+        out = [b for b in self._recognise(image, quads, circle) if parse_number(b.text)]
+        still = [p for p in pending if not any(_explains(b, p, 0.12 * r) for b in out)]
+        for hx, hy in still[:LOCAL_DETECTIONS]:
             window = _hint_window(image, hx, hy, r)
             if window is None:
                 continue
             win, x0, y0 = window
             side = int(min(320, max(160, 32 * round(max(win.shape[:2]) * 2 / 32))))
-            quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(win, max_side=side)]
-            quads = [q for q in quads if math.dist(q.mean(axis=0), (hx, hy)) < 0.25 * r]
-            if quads:
-                quad = min(quads, key=lambda q: math.dist(q.mean(axis=0), (hx, hy)))
-            else:  # faint or tiny print the detector misses: the ink around the point
-                quad = _ink_quad(win, x0, y0, (hx, hy), r)
-                if quad is None:
-                    continue
-            got = self._recognise(image, [quad], circle)
-            out += [b for b in got if parse_number(b.text)]
+            found_quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(win, max_side=side)]
+            found_quads = [q for q in found_quads if math.dist(q.mean(axis=0), (hx, hy)) < 0.25 * r]
+            if found_quads:
+                quad = min(found_quads, key=lambda q: math.dist(q.mean(axis=0), (hx, hy)))
+                out += [b for b in self._recognise(image, [quad], circle) if parse_number(b.text)]
         return out
 
     def read_at_hints(self, image_bgr: np.ndarray, hints: np.ndarray, circle: Circle) -> list[TextBox]:
@@ -290,7 +295,9 @@ class ScaleTextReader:
             # Decimal numbers left out stay on as outliers: on a scale whose other numbers lost their
             # decimal points they are the evidence (gauged.reader.scale, dropped_decimal_point).
             taken = {id(m) for m in kept}
-            markers = kept + [m for m in markers if id(m) not in taken and _decimal(m.text)]
+            height = float(np.median([m.box[3] - m.box[1] for m in kept]))
+            markers = kept + [m for m in markers if id(m) not in taken and _decimal(m.text)
+                              and m.box[3] - m.box[1] <= 1.5 * height]
         out = []
         for m in markers:  # back to crop pixels: the box keeps its size around the mapped centre
             x0, y0, x1, y1 = m.box

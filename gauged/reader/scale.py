@@ -19,14 +19,16 @@ from dataclasses import replace
 import numpy as np
 
 from gauged.geometry.angles import unwrap
-from gauged.geometry.dial_frame import dial_angle
+from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.scale_fit import fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
 REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered",
-           "dropped_decimal_point", "irregular_numbers", "numbers_off_grid")
+           "dropped_decimal_point", "irregular_numbers", "numbers_off_grid",
+           "secondary_scale_only")
+SECONDARY_RADIUS = 0.62  # ring radii; main-scale numbers on 300 synthetic renders sit at >= 0.69 (1st pct)
 GRID_MIN_HINTS = 5  # confident number centres needed for the grid check
 GRID_OFF_SHARE = 0.3  # more than this share of them between grid lines refutes the scale (300 synthetic
 # renders: correct reads <= 0.25, the one wrong read that passed every other check 0.33)
@@ -73,11 +75,28 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
                 return model if len(rings) == 1 else replace(model, detail=f"outer scale: {model.detail}")
             continue
         scales.append(model)
+    if len(rings) == 1:
+        inner = _secondary_only(arc, scales[0])
+        if inner is not None:
+            return inner
     if hints is not None and len(rings) == 1:
         off_grid = _off_grid(arc, scales[0], hints)
         if off_grid is not None:
             return off_grid
     return scales
+
+
+def _secondary_only(arc: ScaleArc, model: ScaleModel) -> StageFailure | None:
+    """A failure when the only numbers read sit deep inside the scale ring: a dual-scale dial's
+    inner (secondary) scale, whose main scale went unread. Answering with the inner scale would be
+    a reading in another unit (synthetic 000022 read 11.0 on its 0..35 inner scale for 0.78 on its
+    0..2.5 main one; a real thermometer read degC for degF)."""
+    inliers = [m for m in model.markers if m.inlier]
+    radius = float(np.median(normalized_radius(arc.ellipse, marker_centres(inliers))))
+    if radius < SECONDARY_RADIUS:
+        return StageFailure(STAGE, "secondary_scale_only",
+                            f"the read numbers sit at {radius:.2f} of the scale ring's radius: an inner scale")
+    return None
 
 
 def _off_grid(arc: ScaleArc, model: ScaleModel, hints: np.ndarray) -> StageFailure | None:

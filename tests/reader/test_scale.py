@@ -47,7 +47,12 @@ def test_an_unreadable_outer_ring_is_refused_not_answered_with_the_inner_scale()
     assert isinstance(failure, StageFailure)
     assert (failure.stage, failure.reason) == ("scale", "too_few_inliers")
     assert failure.detail.startswith("outer scale:")
-    assert not isinstance(fit_scales(arc, markers[:6]), StageFailure)  # the inner ring alone is one scale
+    # the inner ring alone, deep inside the scale ring, is a secondary scale whose main one went unread
+    alone = fit_scales(arc, markers[:6])
+    assert isinstance(alone, StageFailure)
+    assert (alone.stage, alone.reason) == ("scale", "secondary_scale_only")
+    # the same numbers printed just inside the ring are the main scale
+    assert not isinstance(fit_scales(arc, _ring(DIAL, PSI, 0.75, [0, 2, 4, 6, 8, 10])), StageFailure)
 
 
 def test_whole_numbers_with_a_decimal_one_on_their_line_are_a_dropped_decimal_point():
