@@ -93,7 +93,7 @@ class ScaleTextReader:
     """
 
     def __init__(self, threads: int = 2, models: str = DEFAULT_MODEL_PACKAGE, min_score: float = 0.5,
-                 det_side: int = 512, use_hints: bool = True, progression: bool = True,
+                 det_side: int = 384, use_hints: bool = True, progression: bool = True,
                  polar_fallback: bool = True, quick: bool = True) -> None:
         self.engine = OcrEngine(threads=threads, package=models)
         self.min_score = min_score
@@ -105,12 +105,13 @@ class ScaleTextReader:
 
     # -- reading text -------------------------------------------------------------------------
     def read(self, image_bgr: np.ndarray, circle: Circle | None = None,
-             hints: np.ndarray | None = None) -> list[TextBox]:
+             hints: np.ndarray | None = None, known: Sequence[TextBox] = ()) -> list[TextBox]:
         """Every text read on (H, W, 3) uint8 BGR ``image_bgr``, quads in its pixel coordinates.
 
         With ``circle = (cx, cy, r)`` (px) detection is limited to the square around the ring
         :data:`RING` and texts whose centres fall outside the ring are dropped. ``hints`` (N, 2) px
-        are predicted number centres: each one no read number explains gets a local detection.
+        are predicted number centres: each one no read number explains is read again
+        (:meth:`_read_hints`). ``known`` are texts already read (the quick pass's), kept and not re-read.
         """
         if image_bgr.ndim != 3 or image_bgr.shape[2] != 3:
             raise ValueError(f"expected an (H, W, 3) BGR image, got shape {image_bgr.shape}")
@@ -124,6 +125,7 @@ class ScaleTextReader:
             boxes = self._recognise(image_bgr, quads, circle)
         if circle is not None:
             boxes = [b for b in boxes if _in_ring(b.center, circle) and not _tick_mark(b, circle)]
+        boxes += list(known)
         if hints is not None and len(hints) and circle is not None and self.use_hints:
             boxes += self._read_hints(image_bgr, np.asarray(hints, float), boxes, circle)
         return _split_spaced(_dedupe(boxes))
@@ -214,22 +216,25 @@ class ScaleTextReader:
         return [TextBox(rec.text, rec.score, np.asarray(q, np.float32), rec.digits, rec.digits_score)
                 for q, rec in zip(quads, recs, strict=True) if rec.text and rec.score >= self.min_score]
 
-    def read_quick(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None) -> list[TextBox] | None:
-        """The quick pass and the unit, or None when the hints alone do not give enough numbers."""
+    def read_quick(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None
+                   ) -> tuple[list[TextBox] | None, list[TextBox]]:
+        """The quick pass: ``(numbers and unit, numbers)`` when the hints alone give enough numbers,
+        else ``(None, the numbers they gave)`` for the full pass to keep."""
         if not self.quick or hints is None or len(hints) < QUICK_ENOUGH:
-            return None
+            return None, []
         numbers = self.read_at_hints(image_bgr, hints, circle)
         # Numbers deep inside the ring belong to an inner, secondary scale: the main scale's numbers
         # were not hinted, so only the full pass can find them.
         near_ring = [t for t in numbers if math.dist(t.center, circle[:2]) >= INNER_SCALE * circle[2]]
         if _progression_size(near_ring, circle) < QUICK_ENOUGH:
-            return None
-        return numbers + [t for t in self.read_unit_texts(image_bgr, circle) if match_unit(t.text)]
+            return None, numbers
+        return numbers + [t for t in self.read_unit_texts(image_bgr, circle) if match_unit(t.text)], numbers
 
-    def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None) -> list[TextBox]:
+    def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None,
+                  known: Sequence[TextBox] = ()) -> list[TextBox]:
         """:meth:`read` on a rectified dial, plus :meth:`read_polar`'s numbers when the first pass
         yields fewer than :data:`POLAR_BELOW` numbers of one progression (radially printed scales)."""
-        texts = self.read(image_bgr, circle, hints)
+        texts = self.read(image_bgr, circle, hints, known)
         if self.polar_fallback and _progression_size(texts, circle) < POLAR_BELOW:
             polar = [b for b in self.read_polar(image_bgr, circle) if parse_number(b.text)]
             texts = _split_spaced(_dedupe(texts + polar))
@@ -280,9 +285,9 @@ class ScaleTextReader:
         rhints = None
         if hints is not None and len(hints):
             rhints = cv2.perspectiveTransform(np.asarray(hints, np.float64).reshape(-1, 1, 2), matrix).reshape(-1, 2)
-        texts = self.read_quick(rectified, circle, rhints)
+        texts, quick = self.read_quick(rectified, circle, rhints)
         if texts is None:
-            texts = self.read_dial(rectified, circle, rhints)
+            texts = self.read_dial(rectified, circle, rhints, known=quick)
         if not texts:
             return StageFailure(STAGE, "no_text", "no text found on the rectified dial")
         unit = read_unit(texts, circle)
