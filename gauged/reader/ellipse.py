@@ -299,8 +299,9 @@ def _centred_fit(points: np.ndarray, centre: np.ndarray, tol_px: float) -> tuple
     """The ring through ``points`` centred on ``centre`` (the needle pivot), with its inliers.
 
     A centred conic ``A x^2 + B xy + C y^2 = 1`` is linear in its three coefficients; it is refitted
-    on the points within ``tol_px`` until stable. When the arc is too short for its shape to be
-    determined (not an ellipse, or flatter than 3:1) a circle about the centre is used. None when
+    on the points within ``tol_px`` until stable. A short arc barely determines the shape, so the
+    circle about the centre is taken unless its RMS is :data:`CIRCLE_UNLESS` times the ellipse's
+    (plus half a pixel), and always when the conic is no ellipse or is flatter than 3:1. None when
     fewer than four points stay on the ring.
     """
     rel = np.asarray(points, float) - centre
@@ -376,6 +377,10 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     ``poor_fit`` (inlier RMS above ``max_rms_fraction`` of the radius), ``too_oblique`` (axis ratio
     below ``min_axis_ratio``, a dial seen more than ~70 degrees off-axis), ``no_scale_ends`` (start or
     end notch missing and not inferable), ``implausible_span`` (scale span outside 60-350 degrees).
+
+    With a confident pivot peak, a ring whose notches cover less than :data:`SHORT_ARC` about the
+    pivot, or whose centre lies more than :data:`PIVOT_OFF_CENTRE` radii from it, is fitted again
+    about the pivot (:func:`_centred_fit`); ``poor_fit`` when that finds no ring either.
     """
     parts = [keypoints.major.points]
     for peaks in (keypoints.start, keypoints.end):

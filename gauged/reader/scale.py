@@ -75,14 +75,12 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
                 return model if len(rings) == 1 else replace(model, detail=f"outer scale: {model.detail}")
             continue
         scales.append(model)
-    if len(rings) == 1:
-        inner = _secondary_only(arc, scales[0])
-        if inner is not None:
-            return inner
-    if hints is not None and len(rings) == 1:
-        off_grid = _off_grid(arc, scales[0], hints)
-        if off_grid is not None:
-            return off_grid
+    if len(rings) == 1:  # a lone ring must be the main scale, and the printed numbers must agree
+        failure = _secondary_only(arc, scales[0])
+        if failure is None and hints is not None:
+            failure = _off_grid(arc, scales[0], hints)
+        if failure is not None:
+            return failure
     return scales
 
 
@@ -104,8 +102,8 @@ def _off_grid(arc: ScaleArc, model: ScaleModel, hints: np.ndarray) -> StageFailu
 
     Numbers are printed at the values of the progression, so at the fitted scale each confident
     number centre must read (close to) a whole step, or a half, third or quarter step where numbers
-    in between went unread. Misread numbers that happen to agree on a line ("-0.9" read "0", "-0.3" read "3" on a
-    -1..0 vacuum dial) give a step that puts many printed numbers between grid lines.
+    in between went unread. Misread numbers that happen to agree on a line ("-0.9" read "0", "-0.3"
+    read "3" on a -1..0 vacuum dial) give a step that puts many printed numbers between grid lines.
     """
     values = np.unique([m.value for m in model.markers if m.inlier])
     if len(values) < 2 or len(hints) < GRID_MIN_HINTS:
@@ -195,10 +193,10 @@ def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:
     read with its decimals, and that number times 10 or 100 lies where the line puts it, the scale
     is a decimal one read wrong: it is refused.
     """
-    inliers = [m for m in model.markers if m.inlier]
-    if len(inliers) < 2 or any(m.value != round(m.value) for m in inliers):
+    values = np.unique([m.value for m in model.markers if m.inlier])
+    if len(values) < 2 or np.any(values != np.round(values)):
         return None
-    step = float(np.median(np.diff(sorted({m.value for m in inliers})))) if len(inliers) > 1 else 0.0
+    step = float(np.median(np.diff(values)))
     for marker in model.markers:
         if marker.inlier or marker.angle is None or marker.value == round(marker.value):
             continue
