@@ -16,6 +16,7 @@ from gauged.reader.onnx_model import ModelNotAvailable
 from gauged.types import StageFailure
 
 log = logging.getLogger(__name__)
+PROGRESS_EVERY = 50  # images between progress lines on stderr
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -69,7 +70,17 @@ def run_readings(args: argparse.Namespace) -> int:
         log.error("%s", exc)
         return 1
 
+    done = {"images": 0, "failed": 0}
+
     def read(label):
+        value, failure = read_one(label)
+        done["images"] += 1
+        done["failed"] += value is None
+        if done["images"] % PROGRESS_EVERY == 0 or done["images"] == len(labels):
+            log.info("read %d/%d images, %d refused", done["images"], len(labels), done["failed"])
+        return value, failure
+
+    def read_one(label):
         image = cv2.imread(str(image_path(args.data, label)), cv2.IMREAD_COLOR)
         if image is None:
             return None, StageFailure("decode", "unreadable", label.image)

@@ -52,8 +52,7 @@ POLAR_BELOW = 4  # read the unwrapped ring too when the first pass gives fewer p
 LOCAL_DETECTIONS = 2  # hints still unexplained after the ink reads that get a text detection of their own
 QUICK_ENOUGH = 4  # numbers of one progression read at the hints alone that end the quick pass
 INNER_SCALE = 0.66  # scale radii: numbers nearer the centre are a secondary scale's (synthetic: main >= 0.69)
-UNIT_DISC = 0.95  # radius (scale radii) of the face region searched for the unit after a quick pass
-UNIT_DET_SIDE = 320  # text-detector input side for that region
+OUTER_SCALE = 1.12  # scale radii: two numbers beyond this that the hints missed send the quick pass on
 
 Circle = tuple[float, float, float]
 
@@ -204,12 +203,15 @@ class ScaleTextReader:
         boxes = [b for b in self._recognise(image_bgr, quads, circle) if parse_number(b.text)]
         return _split_spaced(_dedupe(boxes))
 
-    def read_unit_texts(self, image_bgr: np.ndarray, circle: Circle) -> list[TextBox]:
-        """Texts on the face inside the scale (where units are printed), for after a quick pass."""
-        roi, x0, y0 = _square(image_bgr, circle[0], circle[1], UNIT_DISC * circle[2])
+    def read_face_texts(self, image_bgr: np.ndarray, circle: Circle, known: Sequence[TextBox]) -> list[TextBox]:
+        """After a quick pass: the texts on the whole ring square (one detection) that the quick
+        pass's numbers ``known`` do not explain, recognised in one batch (the unit, and any number
+        the hints missed)."""
+        roi, x0, y0 = _square(image_bgr, circle[0], circle[1], RING[1] * circle[2])
         if not roi.size:
             return []
-        quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=UNIT_DET_SIDE)]
+        quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
+        quads = [q for q in quads if not any(_explains(b, tuple(q.mean(axis=0)), 0.0) for b in known)]
         if not quads:
             return []
         recs = self.engine.recognize([crop_quad(image_bgr, q) for q in quads])
@@ -219,7 +221,12 @@ class ScaleTextReader:
     def read_quick(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None
                    ) -> tuple[list[TextBox] | None, list[TextBox]]:
         """The quick pass: ``(numbers and unit, numbers)`` when the hints alone give enough numbers,
-        else ``(None, the numbers they gave)`` for the full pass to keep."""
+        else ``(None, the numbers they gave)`` for the full pass to keep.
+
+        Its numbers must form a progression near the ring, and no other numbers may be printed
+        outside the ring: those would be a main scale the crop model did not hint (a degF ring
+        around the degC one it did), which only the full pass reads.
+        """
         if not self.quick or hints is None or len(hints) < QUICK_ENOUGH:
             return None, []
         numbers = self.read_at_hints(image_bgr, hints, circle)
@@ -228,7 +235,11 @@ class ScaleTextReader:
         near_ring = [t for t in numbers if math.dist(t.center, circle[:2]) >= INNER_SCALE * circle[2]]
         if _progression_size(near_ring, circle) < QUICK_ENOUGH:
             return None, numbers
-        return numbers + [t for t in self.read_unit_texts(image_bgr, circle) if match_unit(t.text)], numbers
+        others = self.read_face_texts(image_bgr, circle, numbers)
+        outside = [t for t in others if parse_number(t.text) and math.dist(t.center, circle[:2]) > OUTER_SCALE * circle[2]]
+        if len(outside) >= 2:
+            return None, numbers
+        return numbers + [t for t in others if match_unit(t.text)], numbers
 
     def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None,
                   known: Sequence[TextBox] = ()) -> list[TextBox]:

@@ -34,10 +34,12 @@ def reader():
         pytest.skip(f"OCR engine not installed ({exc}); install its models with: {INSTALL}")
 
 
-def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), scale=0.9, unit="bar"):
-    """A rectified dial: ticks on CIRCLE, numbers at 0.78 r over 270 degrees clockwise from lower
-    left (gap at the bottom), upright or radial (tops outward). Returns image and number centres."""
-    img = np.full((SIZE, SIZE, 3), face, np.uint8)
+def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), scale=0.9, unit="bar",
+                radius=0.78, img=None):
+    """A rectified dial: ticks on CIRCLE, numbers at ``radius`` r (0.78) over 270 degrees clockwise
+    from lower left (gap at the bottom), upright or radial (tops outward), drawn on a new face or on
+    ``img``. Returns image and number centres."""
+    img = np.full((SIZE, SIZE, 3), face, np.uint8) if img is None else img.copy()
     cx, cy, r = CIRCLE
     centres = []
     for i, v in enumerate(values):
@@ -46,7 +48,7 @@ def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), sc
         cv2.line(img, tuple(np.int32((cx, cy) + r * u)), tuple(np.int32((cx, cy) + 1.1 * r * u)), ink, 3)
         text = f"{v:g}"
         (w, h), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 2)
-        c = np.array([cx, cy]) + 0.78 * r * u
+        c = np.array([cx, cy]) + radius * r * u
         patch = np.zeros((3 * h + w, 3 * h + w), np.uint8)
         pc = patch.shape[0] / 2
         cv2.putText(patch, text, (int(pc - w / 2), int(pc + h / 2)), cv2.FONT_HERSHEY_SIMPLEX, scale, 255, 2, cv2.LINE_AA)
@@ -271,3 +273,16 @@ def test_split_spaced_cuts_two_numbers_read_as_one_box():
     assert [p.text for p in parts] == ["200", "220"]
     assert parts[0].center[0] == pytest.approx(15, abs=1) and parts[1].center[0] == pytest.approx(55, abs=1)
     assert [p.text for p in _split_spaced([TextBox("1 6", 0.9, quad)])] == ["1 6"]  # one number, kept whole
+
+
+def test_quick_pass_gives_way_when_numbers_outside_the_ring_were_not_hinted(reader):
+    """A degC ring inside a degF one (the real thermometer of gauge-readings-dev): the crop model
+    hinted only the inner numbers. The quick pass reads them, but the unhinted numbers outside the
+    ring send it on to the full pass; with nothing outside it ends there."""
+    inner = [-40, -20, 0, 20, 40, 60]
+    img, centres = render_dial(inner, unit="C")
+    texts, numbers = reader.read_quick(img, CIRCLE, centres)
+    assert texts is not None and len(read_numbers(numbers)) >= 4  # nothing outside: quick pass done
+    both, _ = render_dial([-40, 0, 40, 80, 120, 160], img=img, unit=None, radius=1.3, scale=0.8)
+    texts, numbers = reader.read_quick(both, CIRCLE, centres)
+    assert texts is None and len(read_numbers(numbers)) >= 4  # its numbers go on to the full pass
