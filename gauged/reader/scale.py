@@ -13,6 +13,7 @@ notch to ``max`` at the end notch, no OCR needed.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import replace
 
@@ -193,7 +194,15 @@ def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:
     read with its decimals, and that number times 10 or 100 lies where the line puts it, the scale
     is a decimal one read wrong: it is refused.
     """
-    values = np.unique([m.value for m in model.markers if m.inlier])
+    inliers = [m for m in model.markers if m.inlier]
+    # A scale that prints a whole value with decimals ("0.0", "1.0") prints every number so: one read
+    # without a decimal point lost it ("0.8" read "8" beside "0.0").
+    padded = [m for m in inliers if re.search(r"\d[.,]0+$", m.text.strip())]
+    bare = [m for m in inliers if not re.search(r"[.,]", m.text) and abs(m.value) >= 1]
+    if padded and bare:
+        return StageFailure(STAGE, "dropped_decimal_point",
+                            f"{padded[0].text!r} prints decimals but {bare[0].text!r} has none: its point was dropped")
+    values = np.unique([m.value for m in inliers])
     if len(values) < 2 or np.any(values != np.round(values)):
         return None
     step = float(np.median(np.diff(values)))

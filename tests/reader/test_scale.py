@@ -129,3 +129,20 @@ def test_printed_numbers_between_the_steps_of_the_read_ones_are_off_grid():
     right = fit_scales(arc, _ring(DIAL, BAR, 0.8, [0, 4, 8]), hints=hints)
     assert not isinstance(right, StageFailure), right
     assert right[0].max_value == pytest.approx(10.0)
+
+
+def test_a_bare_number_beside_one_printed_with_decimals_lost_its_point():
+    """0..1.6 printed "0.0, 0.4, 0.8, 1.2, 1.6" and read "0.0", "8", "12" (synthetic 000111 with the
+    v3 crop model): the three agree on a line 10x too steep; "0.0" shows the scale prints decimals."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    values = [0.0, 4.0, 8.0, 12.0, 16.0]
+    dial = Dial(majors=5)
+    markers = _ring(dial, values, 0.8, [0, 2, 3])
+    markers[0] = ScaleMarker("0.0", 0.0, markers[0].box)
+    failure = fit_scales(fit_scale_arc(keypoints_for(dial, pivot=False), CROP), markers)
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "dropped_decimal_point")
+    # "0" beside "0.5", "1", "1.5" is the usual way to print a decimal scale: no evidence
+    half = _ring(DIAL, [0.5 * v for v in range(11)], 0.8, [0, 1, 2, 3, 4, 6, 8, 10])
+    half = [ScaleMarker(f"{m.value:g}", m.value, m.box) for m in half]
+    assert not isinstance(fit_scales(arc, half), StageFailure)
