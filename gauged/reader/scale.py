@@ -21,7 +21,7 @@ import numpy as np
 
 from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
-from gauged.geometry.scale_fit import fit_scale_model, marker_centres, number_rings
+from gauged.geometry.scale_fit import RING_GAP, fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
@@ -29,6 +29,7 @@ STAGE = "scale"
 REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered",
            "dropped_decimal_point", "irregular_numbers", "numbers_off_grid",
            "secondary_scale_only")
+INNER_RING = 0.8  # ring radii: read numbers inside this may be an inner scale if printed numbers lie further out
 SECONDARY_RADIUS = 0.62  # ring radii; main-scale numbers on 300 synthetic renders sit at >= 0.69 (1st pct)
 GRID_MIN_HINTS = 5  # confident number centres needed for the grid check
 GRID_OFF_SHARE = 0.3  # more than this share of them between grid lines refutes the scale (300 synthetic
@@ -77,7 +78,7 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
             continue
         scales.append(model)
     if len(rings) == 1:  # a lone ring must be the main scale, and the printed numbers must agree
-        failure = _secondary_only(arc, scales[0])
+        failure = _secondary_only(arc, scales[0], hints)
         if failure is None and hints is not None:
             failure = _off_grid(arc, scales[0], hints)
         if failure is not None:
@@ -85,16 +86,23 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
     return scales
 
 
-def _secondary_only(arc: ScaleArc, model: ScaleModel) -> StageFailure | None:
-    """A failure when the only numbers read sit deep inside the scale ring: a dual-scale dial's
-    inner (secondary) scale, whose main scale went unread. Answering with the inner scale would be
-    a reading in another unit (synthetic 000022 read 11.0 on its 0..35 inner scale for 0.78 on its
-    0..2.5 main one; a real thermometer read degC for degF)."""
+def _secondary_only(arc: ScaleArc, model: ScaleModel, hints: np.ndarray | None = None) -> StageFailure | None:
+    """A failure when the numbers read are a dual-scale dial's inner (secondary) scale and its main
+    scale went unread: they sit deep inside the scale ring, or the crop model sees printed numbers
+    further out that no read number explains. Answering with the inner scale would be a reading in
+    another unit (synthetic 000022 read 11.0 on its 0..35 inner scale for 0.78 on its 0..2.5 main
+    one; 000650 read 323.7 on its 0..350 inner scale for 3.28 of 0..4)."""
     inliers = [m for m in model.markers if m.inlier]
     radius = float(np.median(normalized_radius(arc.ellipse, marker_centres(inliers))))
     if radius < SECONDARY_RADIUS:
         return StageFailure(STAGE, "secondary_scale_only",
                             f"the read numbers sit at {radius:.2f} of the scale ring's radius: an inner scale")
+    if hints is not None and len(hints) and radius < INNER_RING:
+        further = normalized_radius(arc.ellipse, np.asarray(hints, float).reshape(-1, 2)) > radius + RING_GAP
+        if further.sum() >= 2:
+            return StageFailure(STAGE, "secondary_scale_only",
+                                f"{int(further.sum())} printed numbers further out than the read ones "
+                                f"(at {radius:.2f} of the ring) were not read: the read scale is an inner one")
     return None
 
 
@@ -199,7 +207,8 @@ def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:
     # without a decimal point lost it ("0.8" read "8" beside "0.0").
     padded = [m for m in inliers if re.search(r"\d[.,]0+$", m.text.strip())]
     bare = [m for m in inliers if not re.search(r"[.,]", m.text) and abs(m.value) >= 1]
-    if padded and bare:
+    whole = all(m.value == round(m.value) for m in inliers)  # "2" beside "1.5" is just "2.0" printed short
+    if padded and bare and whole:
         return StageFailure(STAGE, "dropped_decimal_point",
                             f"{padded[0].text!r} prints decimals but {bare[0].text!r} has none: its point was dropped")
     values = np.unique([m.value for m in inliers])

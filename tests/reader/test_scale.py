@@ -146,3 +146,21 @@ def test_a_bare_number_beside_one_printed_with_decimals_lost_its_point():
     half = _ring(DIAL, [0.5 * v for v in range(11)], 0.8, [0, 1, 2, 3, 4, 6, 8, 10])
     half = [ScaleMarker(f"{m.value:g}", m.value, m.box) for m in half]
     assert not isinstance(fit_scales(arc, half), StageFailure)
+    # "2" beside "1.0" and "1.5" is "2.0" printed short (synthetic 000095): the value is right
+    short = [ScaleMarker("2" if m.value == 2.0 else f"{m.value:.1f}", m.value, m.box) for m in half]
+    assert not isinstance(fit_scales(arc, short), StageFailure)
+
+
+def test_unread_printed_numbers_further_out_make_the_read_ring_a_secondary_scale():
+    """Synthetic 000650: the 0..350 inner scale was read at 0.62 of the ring (just at the radius rule),
+    while the crop model saw printed numbers at 0.85 that no read number explains: its main scale."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    inner = _ring(DIAL, PSI, 0.66, [0, 2, 4, 6, 8, 10])
+    assert not isinstance(fit_scales(arc, inner), StageFailure)  # alone, at 0.66, it passes as a main scale
+    further = _centres(DIAL, [1, 5, 9], radius=0.88)
+    failure = fit_scales(arc, inner, hints=further)
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "secondary_scale_only")
+    assert "further out" in failure.detail
+    # hints on the read ring itself are no such evidence
+    assert not isinstance(fit_scales(arc, inner, hints=_centres(DIAL, [1, 5, 9], radius=0.66)), StageFailure)
