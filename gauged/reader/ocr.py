@@ -169,13 +169,7 @@ class ScaleTextReader:
                    if _in_ring((hx, hy), circle) and not any(_explains(b, (hx, hy), 0.12 * r) for b in numbers)]
         if not pending:
             return []
-        quads = []
-        for hx, hy in pending:
-            window = _hint_window(image, hx, hy, r)
-            quad = None if window is None else _ink_quad(*window, (hx, hy), r)
-            if quad is not None:
-                quads.append(quad)
-        out = [b for b in self._recognise(image, quads, circle) if parse_number(b.text)]
+        out = [b for b in self._recognise(image, _ink_quads(image, pending, r), circle) if parse_number(b.text)]
         still = [p for p in pending if not any(_explains(b, p, 0.12 * r) for b in out)]
         for hx, hy in still[:LOCAL_DETECTIONS]:
             window = _hint_window(image, hx, hy, r)
@@ -193,14 +187,9 @@ class ScaleTextReader:
     def read_at_hints(self, image_bgr: np.ndarray, hints: np.ndarray, circle: Circle) -> list[TextBox]:
         """The quick pass: the ink blob at each hint (predicted number centre, px) recognised, all in
         one batch, no text detection. Returns the readings that parse as numbers."""
-        r = circle[2]
-        quads = []
-        for hx, hy in np.asarray(hints, float).reshape(-1, 2):
-            window = _hint_window(image_bgr, hx, hy, r) if _in_ring((hx, hy), circle) else None
-            quad = None if window is None else _ink_quad(*window, (hx, hy), r)
-            if quad is not None:
-                quads.append(quad)
-        boxes = [b for b in self._recognise(image_bgr, quads, circle) if parse_number(b.text)]
+        in_ring = [(hx, hy) for hx, hy in np.asarray(hints, float).reshape(-1, 2) if _in_ring((hx, hy), circle)]
+        boxes = [b for b in self._recognise(image_bgr, _ink_quads(image_bgr, in_ring, circle[2]), circle)
+                 if parse_number(b.text)]
         return _split_spaced(_dedupe(boxes))
 
     def read_face_texts(self, image_bgr: np.ndarray, circle: Circle, known: Sequence[TextBox]) -> list[TextBox]:
@@ -312,7 +301,7 @@ class ScaleTextReader:
             # decimal points they are the evidence (gauged.reader.scale, dropped_decimal_point).
             taken = {id(m) for m in kept}
             height = float(np.median([m.box[3] - m.box[1] for m in kept]))
-            markers = kept + [m for m in markers if id(m) not in taken and _decimal(m.text)
+            markers = kept + [m for m in markers if id(m) not in taken and m.value != round(m.value)
                               and m.box[3] - m.box[1] <= 1.5 * height]
         out = []
         for m in markers:  # back to crop pixels: the box keeps its size around the mapped centre
@@ -350,12 +339,6 @@ def _progression_size(texts: list[TextBox], circle: Circle) -> int:
         return len(markers)
     fit = filter_progression(markers, radii=[_radius(m, circle) for m in markers])
     return len(fit.kept) if fit else 0
-
-
-def _decimal(text: str) -> bool:
-    """Whether a number's text shows a fractional part ("0.5", "1,6"; not "10" or "5.")."""
-    parsed = parse_number(text)
-    return bool(parsed) and parsed.value != round(parsed.value)
 
 
 def keep_progressions(markers: list[ScaleMarker], circle: Circle) -> list[ScaleMarker]:
@@ -400,13 +383,19 @@ def _hint_window(image: np.ndarray, hx: float, hy: float, r: float) -> tuple[np.
     return None if win.shape[0] < 8 or win.shape[1] < 8 else (win, x0, y0)
 
 
-def _ink_quad(win: np.ndarray, x0: int, y0: int, point: tuple[float, float], r: float) -> np.ndarray | None:
-    """The quad (image px) of the ink at ``point`` in a window whose origin is ``(x0, y0)``, or None."""
-    box = ink_box(win, (point[0] - x0, point[1] - y0), r)
-    if box is None:
-        return None
-    bx0, by0, bx1, by1 = box
-    return np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0])
+def _ink_quads(image: np.ndarray, points: Sequence[tuple[float, float]], r: float) -> list[np.ndarray]:
+    """The quads (image px) of the ink at each point that has some, in the hint window around it."""
+    quads = []
+    for hx, hy in points:
+        window = _hint_window(image, hx, hy, r)
+        if window is None:
+            continue
+        win, x0, y0 = window
+        box = ink_box(win, (hx - x0, hy - y0), r)
+        if box is not None:
+            bx0, by0, bx1, by1 = box
+            quads.append(np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0]))
+    return quads
 
 
 def _in_ring(p: tuple[float, float], circle: Circle) -> bool:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from gauged.geometry.dial_frame import point_at_dial_angle
@@ -16,14 +17,21 @@ from gauged.types import ScaleMarker, StageFailure
 from .dial_maps import CROP, Dial, keypoints_for
 
 
+def _point(dial: Dial, position: float, radius: float, intervals: int) -> np.ndarray:
+    """The point at ``radius`` of the scale ring, ``position`` of ``intervals`` equal steps from the start."""
+    angle = math.radians(dial.start_deg + position * dial.span_deg / intervals)
+    return point_at_dial_angle(dial.ellipse.scaled(radius), angle)[0]
+
+
+def _box(point: np.ndarray) -> tuple[float, float, float, float]:
+    x, y = point
+    return (x - 6, y - 5, x + 6, y + 5)
+
+
 def _ring(dial: Dial, values: list[float], radius: float, steps: list[int] | None = None) -> list[ScaleMarker]:
     """Numbers printed at ``radius`` of the scale ring, at the dial's major notches ``steps``."""
-    step = dial.span_deg / (len(values) - 1)
-    out = []
-    for k in steps if steps is not None else range(len(values)):
-        x, y = point_at_dial_angle(dial.ellipse.scaled(radius), math.radians(dial.start_deg + k * step))[0]
-        out.append(ScaleMarker(f"{values[k]:g}", float(values[k]), (x - 6, y - 5, x + 6, y + 5)))
-    return out
+    return [ScaleMarker(f"{values[k]:g}", float(values[k]), _box(_point(dial, k, radius, len(values) - 1)))
+            for k in (steps if steps is not None else range(len(values)))]
 
 
 DIAL = Dial()
@@ -99,19 +107,14 @@ def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
     assert not isinstance(fit_scales(arc, _ring(DIAL, values, 0.8, [1, 3, 4, 6])), StageFailure)
 
 
-def _centres(dial: Dial, steps: list[int], radius: float = 0.8):
-    import numpy as np
-
-    step = dial.span_deg / (dial.majors - 1)
-    return np.vstack([point_at_dial_angle(dial.ellipse.scaled(radius), math.radians(dial.start_deg + k * step))
-                      for k in steps])
+def _centres(dial: Dial, steps: list[int], radius: float = 0.8) -> np.ndarray:
+    """Printed-number centres (the crop model's hints) at the dial's major notches ``steps``."""
+    return np.vstack([_point(dial, k, radius, dial.majors - 1) for k in steps])
 
 
 def _at(dial: Dial, text: str, position: float) -> ScaleMarker:
     """A number read at ``position`` major steps from the start notch (fractional: between numbers)."""
-    step = dial.span_deg / (dial.majors - 1)
-    x, y = point_at_dial_angle(dial.ellipse.scaled(0.8), math.radians(dial.start_deg + position * step))[0]
-    return ScaleMarker(text, float(text), (x - 6, y - 5, x + 6, y + 5))
+    return ScaleMarker(text, float(text), _box(_point(dial, position, 0.8, dial.majors - 1)))
 
 
 def test_printed_numbers_between_the_steps_of_the_read_ones_are_off_grid():
