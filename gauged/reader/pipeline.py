@@ -32,10 +32,18 @@ DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much mo
 NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
+STAGE_ORDER = ("detect", "crop", "keypoints", "ellipse", "needle", "ocr", "scale", "reading")
 
 
 def _area(box: Box) -> float:
     return max(0.0, box[2] - box[0]) * max(0.0, box[3] - box[1])
+
+
+def _progress(read: "GaugeRead") -> int:
+    """How far a read got: the index of its failing stage in :data:`STAGE_ORDER`, past the end when read."""
+    if read.failure is None:
+        return len(STAGE_ORDER)
+    return STAGE_ORDER.index(read.failure.stage) if read.failure.stage in STAGE_ORDER else 0
 
 
 class ScaleTextReader(Protocol):
@@ -137,7 +145,12 @@ class GaugeReader:
         if any(_area(d.box) >= CLOSE_UP * width * height for d in detections):
             # A close-up photo of one dial (the detector learnt dials in scenes): the photo is the gauge.
             return [self.read_box(image, whole, max(d.score for d in detections), known, primary_unit)]
-        return [self._read_detection(image, d.box, d.score, known, primary_unit) for d in detections]
+        reads = [self._read_detection(image, d.box, d.score, known, primary_unit) for d in detections]
+        if len(reads) == 1 and reads[0].failure is not None:
+            photo = self.read_box(image, whole, reads[0].score, known, primary_unit)
+            if _progress(photo) > _progress(reads[0]):
+                return [photo]
+        return reads
 
     def _read_detection(self, image: np.ndarray, box: Box, score: float, known: KnownScale | None,
                         primary_unit: str | None) -> GaugeRead:

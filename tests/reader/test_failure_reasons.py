@@ -237,6 +237,19 @@ def test_scale_not_covered_when_consistent_numbers_leave_an_end_far_away():
     assert scales[0].min_value == pytest.approx(0, abs=0.05) and scales[0].max_value == pytest.approx(10, abs=0.05)
 
 
+def test_four_or_more_agreeing_numbers_may_leave_an_end_three_steps_away_not_four():
+    """3..7 of a 0..10 dial (the numbers near both ends unread) leave each end three steps off: five
+    numbers at one step carry the line that far. 3..6 leave the top end four steps off: refused."""
+    dial = Dial()
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    middle = [_marker(dial, dial.start_deg + k * step, k) for k in (3, 4, 5, 6, 7)]
+    scales = fit_scales(arc, middle)
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].min_value == pytest.approx(0, abs=0.05) and scales[0].max_value == pytest.approx(10, abs=0.05)
+    assert_failure(fit_scales(arc, middle[:4]), "scale", "scale_not_covered")
+
+
 # coverage ----------------------------------------------------------------------------------------
 
 def test_every_declared_reason_is_named_by_a_test():

@@ -43,3 +43,21 @@ def test_a_detection_holding_only_the_hub_is_read_again_in_a_larger_box(seed):
     assert read.box[2] - read.box[0] > 0.9 * min(GROW * 2 * half, 448)
     # without OCR it cannot give a value; it fails past the ellipse (needle, or the missing OCR)
     assert read.failure is not None and read.failure.stage in ("needle", "ocr")
+
+
+def test_a_lone_refused_detection_of_a_close_up_gives_way_to_the_photo_read_whole():
+    """The detector boxed a corner of a photo the dial fills (as it boxes a printed number on some
+    real close-ups): even the grown box holds no ring, so the photo is read whole, and that read,
+    which finds the scale arc, is the one reported."""
+    path = packaged_model_path(CROP_MODEL)
+    if not path.is_file():
+        pytest.skip(f"gauged/models/{CROP_MODEL} is not shipped")
+    sample = render_crop(5_000_011, 448, clean=True)
+    corner = (0.0, 0.0, 16.0, 16.0)
+    reader = GaugeReader(OnnxModel(path, threads=1), detector=HubDetector(corner), ocr=None)
+
+    assert reader._read_detection(sample.image, corner, 0.9, None, None).arc is None
+    (read,) = reader.read_image(sample.image)
+    assert read.box == (0.0, 0.0, 448.0, 448.0)
+    assert read.arc is not None, read.failure
+    assert read.failure is not None and read.failure.stage in ("needle", "ocr")

@@ -72,3 +72,16 @@ def test_detector_loss_decreases_on_one_batch():
         optimizer.step()
         losses.append(float(loss))
     assert losses[-1] < 0.5 * losses[0]
+
+
+def test_synthetic_needle_masks_are_widened_to_the_annotators_convention_and_real_ones_kept():
+    from gauged.training.train_crop import widened_needle
+
+    needle = np.zeros((SIZE, SIZE), np.uint8)
+    needle[31:33, 32:60] = 1  # two pixels wide, as the engine paints a thin needle
+    synth = widened_needle(CropSample(np.zeros((SIZE, SIZE, 3), np.uint8), {}, needle, "synth/7"), 1)
+    rows = np.nonzero(synth.needle[:, 45])[0]
+    assert rows.tolist() == [30, 31, 32, 33]  # one pixel more on each side
+    real = CropSample(np.zeros((SIZE, SIZE, 3), np.uint8), {}, needle, "needle-polygons/train/a.jpg")
+    assert widened_needle(real, 1) is real
+    assert widened_needle(CropSample(real.image, {}, None, "synth/8"), 1).needle is None
