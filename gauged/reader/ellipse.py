@@ -446,5 +446,18 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # gap too): then a single number peak of any score in that gap refutes it.
     in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span, 0.0 if inferred else NUMBER_SCORE)
     if in_gap >= (1 if inferred else GAP_NUMBERS):
+        gap = None if inferred or inliers.sum() < 4 else _ends_from_gap(notch_angles)
+        if gap is not None and _plausible_gap(keypoints, ellipse, centre, *gap):
+            # The found end notches are refuted by numbers in their gap (the model took a notch
+            # mid-scale for an end: a real 0..160 dial's "start" at 120); the largest gap between
+            # the notches holds no number at all, so it is taken as the scale's, as when no end is found.
+            start, end = gap
+            return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, True)
         return StageFailure(STAGE, "numbers_outside_scale", f"{in_gap} scale numbers lie in the gap between the scale ends")
     return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred)
+
+
+def _plausible_gap(keypoints: CropKeypoints, ellipse: Ellipse, centre, start: float, end: float) -> bool:
+    """Whether ends inferred from a gap span a plausible scale with no number peak of any score in the gap."""
+    span = scale_span(start, end)
+    return MIN_SPAN <= span <= MAX_SPAN and _numbers_in_gap(keypoints, ellipse, centre, start, span, 0.0) == 0

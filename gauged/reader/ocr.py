@@ -228,7 +228,11 @@ class ScaleTextReader:
         outside = [t for t in others if parse_number(t.text) and math.dist(t.center, circle[:2]) > OUTER_SCALE * circle[2]]
         if len(outside) >= 2:
             return None, numbers
-        return numbers + [t for t in others if match_unit(t.text)], numbers
+        # The face's detection also read main-scale numbers the hints' ink missed: they are kept, as
+        # the full pass would keep them (an inner scale's numbers are left to the full pass).
+        missed = [t for t in others if parse_number(t.text) and _in_ring(t.center, circle) and not _tick_mark(t, circle)
+                  and math.dist(t.center, circle[:2]) >= INNER_SCALE * circle[2]]
+        return _dedupe(numbers + missed) + [t for t in others if match_unit(t.text)], numbers
 
     def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None,
                   known: Sequence[TextBox] = ()) -> list[TextBox]:

@@ -146,9 +146,9 @@ class GaugeReader:
             # A close-up photo of one dial (the detector learnt dials in scenes): the photo is the gauge.
             return [self.read_box(image, whole, max(d.score for d in detections), known, primary_unit)]
         reads = [self._read_detection(image, d.box, d.score, known, primary_unit) for d in detections]
-        if len(reads) == 1 and reads[0].failure is not None:
-            photo = self.read_box(image, whole, reads[0].score, known, primary_unit)
-            if _progress(photo) > _progress(reads[0]):
+        if all(read.failure is not None for read in reads):
+            photo = self.read_box(image, whole, max(read.score for read in reads), known, primary_unit)
+            if _progress(photo) > max(_progress(read) for read in reads):
                 return [photo]
         return reads
 
