@@ -129,7 +129,11 @@ class GaugeReader:
         Without a detector the whole image is read as one gauge (a photo cropped to the dial); so is
         a close-up, where a detection covers :data:`CLOSE_UP` of the image or more, and an image
         where the detector finds nothing (that read's failure is returned once it got as far as a scale
-        arc, i.e. there is a dial; before that, the detector's failure).
+        arc, i.e. there is a dial; before that, the detector's failure). So is an image whose every
+        detection is refused: the detector sometimes boxes a number or the hub of a dial that fills
+        the photo, and the photo's own crop is a second look at a dial refused at OCR. The photo read
+        whole is kept when it gets further than every detection; in a scene of several dials it
+        seldom gets past the ellipse, and then changes nothing.
         """
         if self.detector is None:
             height, width = image.shape[:2]
