@@ -227,3 +227,28 @@ def test_a_sector_scale_is_fitted_about_the_needle_pivot(seed):
     assert math.hypot(arc.ellipse.cx - 128, arc.ellipse.cy - 128) < 3.0
     assert abs(math.sqrt(arc.ellipse.a * arc.ellipse.b) - 60) < 3.0
     assert abs(angle_difference(arc.start_angle, dial.start)) < math.radians(2)
+
+
+def test_found_ends_refuted_by_numbers_give_way_to_the_notches_largest_gap():
+    """The crop model took a mid-scale notch for the start (a real 0..160 dial's "start" at 120):
+    the numbers printed between it and the end refute those ends, while the notches' largest gap,
+    the scale's real one, holds no number: the arc is read with the ends from that gap."""
+    from dataclasses import replace
+
+    from gauged.reader.keypoints import Peaks
+
+    dial = Dial(start_deg=135, span_deg=270)
+    notches = dial.notch_points()
+    keypoints = keypoints_for(dial)
+    false_start = Peaks(notches[7:8], np.array([0.9]))  # the 8th of 11 notches taken for the start
+    numbers = point_at_dial_angle(dial.ellipse.scaled(0.8), dial.notch_angles())
+    wrong = _with_numbers(replace(keypoints, start=false_start), numbers)
+    arc = fit_scale_arc(wrong, CROP)
+    assert not isinstance(arc, StageFailure), arc
+    assert arc.ends_inferred
+    assert math.degrees(arc.span) == pytest.approx(270, abs=3)
+    assert math.degrees(math.remainder(arc.start_angle - dial.start, 2 * math.pi)) == pytest.approx(0, abs=3)
+    # a number printed in the real gap too leaves no gap free of numbers: refused
+    in_gap = point_at_dial_angle(dial.ellipse.scaled(0.8), math.radians(90.0))
+    refused = fit_scale_arc(_with_numbers(replace(keypoints, start=false_start), np.vstack([numbers, in_gap])), CROP)
+    assert isinstance(refused, StageFailure) and refused.reason == "numbers_outside_scale"
