@@ -129,11 +129,13 @@ class GaugeReader:
         Without a detector the whole image is read as one gauge (a photo cropped to the dial); so is
         a close-up, where a detection covers :data:`CLOSE_UP` of the image or more, and an image
         where the detector finds nothing (that read's failure is returned once it got as far as a scale
-        arc, i.e. there is a dial; before that, the detector's failure). So is an image whose every
-        detection is refused: the detector sometimes boxes a number or the hub of a dial that fills
-        the photo, and the photo's own crop is a second look at a dial refused at OCR. The photo read
-        whole is kept when it gets further than every detection; in a scene of several dials it
-        seldom gets past the ellipse, and then changes nothing.
+        arc, i.e. there is a dial; before that, the detector's failure). So is an image where no
+        detection holds a scale ring: the detector sometimes boxes a number or the hub of a dial that
+        fills the photo. The photo read whole is kept when it gets further than every detection; in a
+        scene of several dials it seldom gets past the ellipse, and then changes nothing. A dial found
+        and then refused (needle, OCR, scale) is not read again: on the held-out renders a second try
+        at such dials answered three of them 4-5x the span off (each check passes a wrong scale now and
+        then, and every try is another chance for one to pass).
         """
         if self.detector is None:
             height, width = image.shape[:2]
@@ -150,7 +152,7 @@ class GaugeReader:
             # A close-up photo of one dial (the detector learnt dials in scenes): the photo is the gauge.
             return [self.read_box(image, whole, max(d.score for d in detections), known, primary_unit)]
         reads = [self._read_detection(image, d.box, d.score, known, primary_unit) for d in detections]
-        if all(read.failure is not None for read in reads):
+        if all(read.failure is not None and read.arc is None for read in reads):
             photo = self.read_box(image, whole, max(read.score for read in reads), known, primary_unit)
             if _progress(photo) > max(_progress(read) for read in reads):
                 return [photo]

@@ -23,6 +23,7 @@ from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.scale_fit import RING_GAP, fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
+from gauged.reader.numbers import parse_number
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
@@ -185,6 +186,10 @@ def _uncovered(model: ScaleModel) -> StageFailure | None:
     extrapolating would answer with a wild value, so the scale is refused instead.
     """
     values = sorted({m.value for m in model.markers if m.inlier})
+    # Numbers read as digits are the evidence; a letter taken for a digit is not: "S" read as 5 beside
+    # "15, 20, 25" (a 0.5..2.5 scale whose decimal points all went unread) "covered" the low end.
+    digits = sorted({m.value for m in model.markers if m.inlier and _read_as_digits(m.text)})
+    values = digits if len(digits) >= 2 else values
     if len(values) < 2:
         return None
     step = float(np.median(np.diff(values)))
@@ -197,6 +202,12 @@ def _uncovered(model: ScaleModel) -> StageFailure | None:
                             f"numbers {values[0]:g}..{values[-1]:g} (step {step:g}) do not reach the scale ends "
                             f"{model.min_value:.4g}..{model.max_value:.4g}")
     return None
+
+
+def _read_as_digits(text: str) -> bool:
+    """Whether OCR read the number as digits, with no letter taken for one ("O" for 0, "S" for 5)."""
+    parsed = parse_number(text)
+    return parsed is not None and parsed.confusions == 0
 
 
 def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:

@@ -250,6 +250,20 @@ def test_four_or_more_agreeing_numbers_may_leave_an_end_three_steps_away_not_fou
     assert_failure(fit_scales(arc, middle[:4]), "scale", "scale_not_covered")
 
 
+
+def test_a_letter_taken_for_a_digit_does_not_cover_a_scale_end():
+    """Only numbers read as digits show where the scale's numbers run: "0" beside 8, 9, 10 reaches the
+    start, "O" taken for 0 does not (a 0.5..2.5 render read "S, 15, 20, 25" answered 10x the truth)."""
+    from dataclasses import replace
+
+    dial = Dial()
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    numbers = [_marker(dial, dial.start_deg + k * step, k) for k in (0, 8, 9, 10)]
+    assert not isinstance(fit_scales(arc, numbers), StageFailure)
+    letter = [replace(numbers[0], text="O"), *numbers[1:]]
+    assert_failure(fit_scales(arc, letter), "scale", "scale_not_covered")
+
 # coverage ----------------------------------------------------------------------------------------
 
 def test_every_declared_reason_is_named_by_a_test():
