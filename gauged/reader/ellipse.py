@@ -92,6 +92,7 @@ class ScaleArc:
         return float(out) if np.ndim(angle) == 0 else np.asarray(out)
 
 
+GAP_MIN_NOTCHES = 4  # notches needed to infer the ends from their largest gap (with three, any gap could be it)
 GAP_NUMBERS = 2  # confident number peaks in the gap that mean found ends are wrong (1 for inferred ends)
 NUMBER_BAND = (0.55, 1.45)  # normalised radii where scale numbers sit
 NUMBER_SCORE = 0.5
@@ -427,7 +428,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
             centre = (float(pivot[0]), float(pivot[1]))
     inferred = not (len(keypoints.start) and len(keypoints.end))
     if inferred:
-        if inliers.sum() < 4:  # with three notches any of the three gaps could be the scale's
+        if inliers.sum() < GAP_MIN_NOTCHES:
             return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and too few notches to infer them")
         ends = _ends_from_gap(dial_angle(ellipse, points[inliers], centre))
         if ends is None:
@@ -446,7 +447,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # gap too): then a single number peak of any score in that gap refutes it.
     in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span, 0.0 if inferred else NUMBER_SCORE)
     if in_gap >= (1 if inferred else GAP_NUMBERS):
-        gap = None if inferred or inliers.sum() < 4 else _ends_from_gap(notch_angles)
+        gap = None if inferred or inliers.sum() < GAP_MIN_NOTCHES else _ends_from_gap(notch_angles)
         if gap is not None and _plausible_gap(keypoints, ellipse, centre, *gap):
             # The found end notches are refuted by numbers in their gap (the model took a notch
             # mid-scale for an end: a real 0..160 dial's "start" at 120); the largest gap between

@@ -7,8 +7,11 @@ from gauged.reader import crop, detect, ellipse, keypoints, needle, ocr, reading
 OCR_UNAVAILABLE = "ocr_unavailable"  # the pipeline's own: no OCR engine and no configured scale
 
 
+_STAGE_MODULES = (detect, crop, keypoints, ellipse, needle, ocr, scale, reading)
+STAGE_ORDER = tuple(module.STAGE for module in _STAGE_MODULES)  # the stages in pipeline order
+
+
 def failure_pairs() -> tuple[tuple[str, str], ...]:
     """All pairs, in pipeline order, so counters can be created at zero before the first failure."""
-    stages = (detect, crop, keypoints, ellipse, needle, ocr, scale, reading)
-    pairs = [(module.STAGE, reason) for module in stages for reason in module.REASONS]
+    pairs = [(module.STAGE, reason) for module in _STAGE_MODULES for reason in module.REASONS]
     return (*pairs, (ocr.STAGE, OCR_UNAVAILABLE))

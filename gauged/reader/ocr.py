@@ -125,7 +125,7 @@ class ScaleTextReader:
             quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
             boxes = self._recognise(image_bgr, quads, circle)
         if circle is not None:
-            boxes = [b for b in boxes if _in_ring(b.center, circle) and not _tick_mark(b, circle)]
+            boxes = _ring_texts(boxes, circle)
         boxes += list(known)
         if hints is not None and len(hints) and circle is not None and self.use_hints:
             boxes += self._read_hints(image_bgr, np.asarray(hints, float), boxes, circle)
@@ -223,7 +223,7 @@ class ScaleTextReader:
         numbers = self.read_at_hints(image_bgr, hints, circle)
         # Numbers deep inside the ring belong to an inner, secondary scale: the main scale's numbers
         # were not hinted, so only the full pass can find them.
-        near_ring = [t for t in numbers if math.dist(t.center, circle[:2]) >= INNER_SCALE * circle[2]]
+        near_ring = [t for t in numbers if _main_scale(t, circle)]
         if _progression_size(near_ring, circle) < QUICK_ENOUGH:
             return None, numbers
         others = self.read_face_texts(image_bgr, circle, numbers)
@@ -232,8 +232,7 @@ class ScaleTextReader:
             return None, numbers
         # The face's detection also read main-scale numbers the hints' ink missed: they are kept, as
         # the full pass would keep them (an inner scale's numbers are left to the full pass).
-        missed = [t for t in others if parse_number(t.text) and _in_ring(t.center, circle) and not _tick_mark(t, circle)
-                  and math.dist(t.center, circle[:2]) >= INNER_SCALE * circle[2]]
+        missed = [t for t in _ring_texts(others, circle) if parse_number(t.text) and _main_scale(t, circle)]
         return _dedupe(numbers + missed) + [t for t in others if match_unit(t.text)], numbers
 
     def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None,
@@ -402,6 +401,16 @@ def _ink_quads(image: np.ndarray, points: Sequence[tuple[float, float]], r: floa
             bx0, by0, bx1, by1 = box
             quads.append(np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0]))
     return quads
+
+
+def _ring_texts(boxes: Sequence[TextBox], circle: Circle) -> list[TextBox]:
+    """The texts centred in the ring :data:`RING` that are not scale ticks read as "1"."""
+    return [b for b in boxes if _in_ring(b.center, circle) and not _tick_mark(b, circle)]
+
+
+def _main_scale(box: TextBox, circle: Circle) -> bool:
+    """Whether a text sits where the main scale's numbers do, not deep inside (:data:`INNER_SCALE`)."""
+    return math.dist(box.center, circle[:2]) >= INNER_SCALE * circle[2]
 
 
 def _in_ring(p: tuple[float, float], circle: Circle) -> bool:

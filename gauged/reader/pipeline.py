@@ -18,7 +18,7 @@ import numpy as np
 from gauged.reader.crop import Crop, crop_gauge
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.ellipse import ScaleArc, fit_scale_arc
-from gauged.reader.failures import OCR_UNAVAILABLE
+from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
 from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
 from gauged.reader.needle import NeedleReading, fit_needle
 from gauged.reader.onnx_model import OnnxModel, to_model_input
@@ -32,7 +32,6 @@ DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much mo
 NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
-STAGE_ORDER = ("detect", "crop", "keypoints", "ellipse", "needle", "ocr", "scale", "reading")
 
 
 def _area(box: Box) -> float:

@@ -39,7 +39,7 @@ STEP_TOLERANCE = 0.1  # of the smallest step: differences of agreeing numbers mu
 DECIMAL_MATCH = 0.3  # of a number step: a decimal number x10 this close to the line betrays dropped points
 COVER_STEPS = 2.5  # the read numbers must reach within this many number steps of both scale ends (1.5
 # refused 26 of 300 synthetic renders, 14 of which 2.5 reads within 2.1%; the bunched-numbers case stays refused)
-COVER_STEPS_SURE = 3.5  # ... or this many when at least SURE_NUMBERS distinct numbers agree (dev sets: 300
+COVER_STEPS_SURE = 3.5  # ... or this many when SURE_NUMBERS distinct numbers read as digits agree (dev sets: 300
 SURE_NUMBERS = 4  # synthetic + 21 real, 5 more reads all within 1.2%; every wild read had 3 numbers or a 4.8-step gap)
 
 
