@@ -91,6 +91,27 @@ class ScaleArc:
         out = wrap_to_pi(corrected)
         return float(out) if np.ndim(angle) == 0 else np.asarray(out)
 
+    def on_notches(self, angle: np.ndarray) -> np.ndarray:
+        """:meth:`linear` angles of scale numbers moved onto the major notch each one labels.
+
+        A printed number labels a major notch, but its box centre, seen from the dial centre, sits a
+        few degrees off it: upright text is not centred on its radius (a real 0..100 dial's "40" reads
+        6.6 degrees off, beyond the scale fit's tolerance). On a regular notch grid (:func:`notch_grid`)
+        each angle within :data:`SNAP_TOLERANCE` of a step of a grid position, missed notches included,
+        takes that position; others, and all when there is no grid, are returned as they are.
+        """
+        angle = np.asarray(angle, float)
+        grid = self.notch_grid
+        if grid is None:
+            return angle
+        start, end = grid[1][0], grid[1][-1]
+        step = float(np.min(np.diff(grid[1])))
+        u = unwrap(angle, self.zero_angle)
+        k = np.rint((u - start) / step)
+        node = start + k * step
+        snap = (np.abs(u - node) <= SNAP_TOLERANCE * step) & (node >= start - 1e-9) & (node <= end + 1e-9)
+        return np.where(snap, wrap_to_pi(node), angle)
+
 
 GAP_MIN_NOTCHES = 4  # notches needed to infer the ends from their largest gap (with three, any gap could be it)
 GAP_NUMBERS = 2  # confident number peaks in the gap that mean found ends are wrong (1 for inferred ends)
@@ -117,6 +138,7 @@ def _numbers_in_gap(keypoints: CropKeypoints, ellipse: Ellipse, centre, start: f
 
 
 GRID_TOLERANCE = 0.3  # of the notch step: how far a gap may be from a whole number of steps
+SNAP_TOLERANCE = 0.3  # of the notch step: how far a number may sit from the notch it labels
 
 
 def notch_grid(notch_angles: np.ndarray, start: float, end: float) -> tuple[np.ndarray, np.ndarray] | None:

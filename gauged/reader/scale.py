@@ -60,10 +60,10 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
     if the inner ring fits: the inner scale is the secondary one. ``hints`` (N, 2) crop px are the
     crop model's confident number centres: the primary scale must put them on its number grid.
     """
-    # Number angles in the same corrected frame as the needle's (ScaleArc.linear).
+    # Number angles in the same corrected frame as the needle's (ScaleArc.linear), on their notches.
     markers = list(markers)
     if markers:
-        angles = arc.linear(dial_angle(arc.ellipse, marker_centres(markers), arc.centre))
+        angles = arc.on_notches(arc.linear(dial_angle(arc.ellipse, marker_centres(markers), arc.centre)))
         markers = [replace(m, angle=float(a)) for m, a in zip(markers, angles, strict=True)]
     rings = number_rings(arc.ellipse, markers)
     if not rings:

@@ -174,6 +174,28 @@ def test_scale_arc_linear_reads_a_needle_on_a_bent_notch_at_its_true_place():
     assert arc.linear(outside) == pytest.approx(outside)
 
 
+def test_scale_arc_puts_numbers_printed_beside_their_notch_on_it():
+    e = Ellipse(128, 128, 100, 100, 0)
+    start, step = math.radians(135), math.radians(27)  # 10 steps over 270 degrees
+    even = start + step * np.arange(11)
+    notches = point_at_dial_angle(e, np.delete(even, [3, 6]))  # two majors missed by the model
+    arc = ScaleArc(e, e.center, float(even[0]), float(even[-1]), wrap_angle(even[0], even[-1]), notches, 0.0, False)
+    # Numbers 6.6 degrees beside notches 2 and 6 (a missed one) and on notch 10 take the notches' angles;
+    # one midway between notches, and one in the gap beyond the end, keep their own.
+    off = math.radians(6.6)
+    numbers = np.array([even[2] - off, even[6] + off, even[10], even[4] + 0.5 * step, even[10] + 2 * step])
+    snapped = unwrap(arc.on_notches(arc.linear(numbers)), arc.zero_angle)
+    expected = unwrap(np.array([even[2], even[6], even[10], even[4] + 0.5 * step, even[10] + 2 * step]), arc.zero_angle)
+    assert snapped == pytest.approx(expected, abs=1e-9)
+
+
+def test_scale_arc_leaves_numbers_alone_without_a_notch_grid():
+    e = Ellipse(128, 128, 100, 100, 0)
+    arc = ScaleArc(e, e.center, 2.4, 0.8, wrap_angle(2.4, 0.8), np.zeros((0, 2)), 0.0, False)
+    angles = np.array([2.5, 3.0, -2.0])
+    assert arc.on_notches(angles) == pytest.approx(angles)
+
+
 def _with_numbers(keypoints, points, score=0.8):
     from dataclasses import replace
 
