@@ -68,6 +68,7 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
     rings = number_rings(arc.ellipse, markers)
     if not rings:
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")
+    whole: ScaleModel | StageFailure | None = None
     if len(rings) == 2:
         whole = _fit_ring(arc, markers, unit, min_inliers)
         if not isinstance(whole, StageFailure) and _spans_both(whole, rings):
@@ -77,7 +78,15 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
         model = _fit_ring(arc, ring, unit, min_inliers)
         if isinstance(model, StageFailure):
             if index == 0:
-                return model if len(rings) == 1 else replace(model, detail=f"outer scale: {model.detail}")
+                if len(rings) == 1:
+                    return model
+                if not isinstance(whole, StageFailure) and _from_ring(whole, rings[0]) >= 2:
+                    # Too few outer numbers for a scale of their own, but with a number of the inner
+                    # ring they make one (a "0" printed nearer the centre than "100, 200": synthetic
+                    # dev 000077): it is checked as a lone ring is.
+                    rings, scales = [markers], [whole]
+                    break
+                return replace(model, detail=f"outer scale: {model.detail}")
             continue
         scales.append(model)
     if len(rings) == 1:  # a lone ring must be the main scale, and the printed numbers must agree
@@ -139,10 +148,14 @@ def _off_grid(arc: ScaleArc, model: ScaleModel, hints: np.ndarray) -> StageFailu
 
 def _spans_both(model: ScaleModel, rings: list[list[ScaleMarker]]) -> bool:
     """Whether at least two agreeing numbers of ``model`` come from each of the two rings."""
-    outer = {m.box for m in rings[0]}
-    inlier_boxes = [m.box for m in model.markers if m.inlier]
-    from_outer = sum(box in outer for box in inlier_boxes)
-    return from_outer >= 2 and len(inlier_boxes) - from_outer >= 2
+    from_outer = _from_ring(model, rings[0])
+    return from_outer >= 2 and sum(m.inlier for m in model.markers) - from_outer >= 2
+
+
+def _from_ring(model: ScaleModel, ring: list[ScaleMarker]) -> int:
+    """How many agreeing numbers of ``model`` come from ``ring``."""
+    boxes = {m.box for m in ring}
+    return sum(m.box in boxes for m in model.markers if m.inlier)
 
 
 def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inliers: int) -> ScaleModel | StageFailure:

@@ -93,6 +93,21 @@ def test_one_scale_whose_numbers_look_like_two_rings_is_fitted_whole():
     assert scales[0].max_value == pytest.approx(25.0, abs=0.01)
 
 
+def test_two_outer_numbers_with_an_inner_one_on_their_line_are_one_scale():
+    """A "0" printed nearer the centre than "4" and "8" splits the numbers into two rings, the outer
+    one too small for a scale; the three agree on one line, so they are one scale (synthetic dev 000077)."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    markers = _ring(DIAL, BAR, 0.7, [0]) + _ring(DIAL, BAR, 1.1, [4, 8])
+    scales = fit_scales(arc, markers)
+    assert not isinstance(scales, StageFailure), scales
+    assert len(scales) == 1 and scales[0].inliers == 3
+    assert scales[0].max_value == pytest.approx(10.0, abs=0.01)
+    # a misread inner number off the outer ones' line leaves them too few, as before
+    wrong = _ring(DIAL, [3.0] + BAR[1:], 0.7, [0]) + _ring(DIAL, BAR, 1.1, [4, 8])
+    failure = fit_scales(arc, wrong)
+    assert isinstance(failure, StageFailure) and failure.reason == "too_few_inliers"
+
+
 def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
     """10, 150, 200 of a 0..300 dial ("50" misread "10" near the line): the differences 140 and 50
     are no multiples of one step, so the bent line is refused."""
