@@ -31,6 +31,7 @@ import numpy as np
 from gauged.reader.ocr_engine import TextBox
 from gauged.types import ScaleMarker, StageFailure
 
+PITCH = 1.2  # text heights: most between the centres of neighbouring characters of one number
 MAX_DIGITS = 5  # "10000" is the longest number on a real dial face; longer strings are serials
 MINUS_LIKE = "-−–—‐‑~_"
 # OCR look-alikes, applied only when the whole string is otherwise numeric.
@@ -183,7 +184,15 @@ def _mergeable(a: TextBox, b: TextBox, gap: float, align: float) -> bool:
     b_left = float(np.min((b.quad - a.quad[0]) @ u))
     b_right = float(np.max((b.quad - a.quad[0]) @ u))
     across = abs(float((np.asarray(b.center) - np.asarray(a.center)) @ v))
-    return b_right > a_right and -0.3 * h <= b_left - a_right <= gap * h and across <= align * h
+    if not (b_right > a_right and -0.3 * h <= b_left - a_right <= gap * h and across <= align * h):
+        return False
+    # The detector's boxes are padded, so close separate numbers ("1", "2", "3" on a short scale) can
+    # come within the gap; the characters' own spacing tells them apart: the last character of ``a``
+    # and the first of ``b`` (each box split evenly by its characters) are a digit pitch apart.
+    a_left = float(np.min((a.quad - a.quad[0]) @ u))
+    last_a = a_right - 0.5 * (a_right - a_left) / max(1, len(a.text))
+    first_b = b_left + 0.5 * (b_right - b_left) / max(1, len(b.text))
+    return first_b - last_a <= PITCH * h
 
 
 def _hull_quad(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:

@@ -66,6 +66,15 @@ def test_merge_fragments_joins_split_numbers_and_keeps_apart_ones():
     assert joined.box == pytest.approx((100, 100, 128, 120))
 
 
+def test_merge_fragments_keeps_close_single_numbers_apart():
+    """Padded boxes of "1", "2", "3" printed 36 px apart on a short scale come within the gap, but
+    their characters are two text heights apart, not a digit pitch: three numbers, not "123"."""
+    boxes = [box("1", 90, 100, 118, 120), box("2", 126, 100, 154, 120), box("3", 162, 100, 190, 120)]
+    assert sorted(b.text for b in merge_fragments(boxes)) == ["1", "2", "3"]
+    # the same padding around the digits of one number still joins them
+    assert [b.text for b in merge_fragments([box("1", 90, 100, 108, 120), box("6", 104, 100, 122, 120)])] == ["16"]
+
+
 def test_merge_fragments_needs_alignment_and_similar_height():
     assert len(merge_fragments([box("1", 100, 100, 108, 120), box("6", 110, 125, 120, 145)])) == 2  # not level
     assert len(merge_fragments([box("1", 100, 100, 108, 120), box("6", 110, 100, 140, 160)])) == 2  # 3x taller
