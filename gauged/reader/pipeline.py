@@ -128,8 +128,8 @@ class GaugeReader:
 
         Without a detector the whole image is read as one gauge (a photo cropped to the dial); so is
         a close-up, where a detection covers :data:`CLOSE_UP` of the image or more, and an image
-        where the detector finds nothing (read again with a :data:`PHOTO_MARGIN` around it when no scale
-        ring is found; that read's failure is returned once it got as far as a scale arc, i.e. there is
+        where the detector finds nothing (read again with a :data:`PHOTO_MARGIN` around it when its notches
+        make no scale ring; that read's failure is returned once it got as far as a scale arc, i.e. there is
         a dial; before that, the detector's failure). So is an image where no
         detection holds a scale ring: the detector sometimes boxes a number or the hub of a dial that
         fills the photo. The photo read whole is kept when it gets further than every detection; in a
@@ -148,9 +148,9 @@ class GaugeReader:
             # No dial found in the photo as a scene: it may be a close-up of one; the later stages
             # refuse honestly when it is not a dial at all (the detection failure is then reported).
             read = self.read_box(image, whole, 0.0, known, primary_unit)
-            if read.failure is not None and read.arc is None:
-                # A dial that fills the photo runs past its edges, where the crop model finds too few
-                # of its notches: the photo is read once more with a margin around it.
+            if read.failure is not None and read.failure.stage == "ellipse":
+                # Notches but no ring: a dial that fills the photo runs past its edges, where the crop
+                # model finds too few of its notches; the photo is read once more with a margin around it.
                 m = PHOTO_MARGIN
                 wider = self.read_box(image, (-m * width, -m * height, (1 + m) * width, (1 + m) * height), 0.0,
                                       known, primary_unit)
