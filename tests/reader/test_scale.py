@@ -108,6 +108,19 @@ def test_two_outer_numbers_with_an_inner_one_on_their_line_are_one_scale():
     assert isinstance(failure, StageFailure) and failure.reason == "too_few_inliers"
 
 
+def test_a_letter_read_as_a_digit_does_not_make_the_third_agreeing_number():
+    """ "S" read as 5 beside "15" and "25" (a 0..2.5 scale whose decimal points went unread): the three
+    agree on a line 10x too steep; two numbers read as digits are too few, so it is refused."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    values = [5.0 * v for v in range(6)]  # 0..25 in steps of 5, numbers printed at every other one
+    markers = _ring(DIAL, values, 0.8, [1, 3, 5])
+    assert not isinstance(fit_scales(arc, markers), StageFailure)  # 5, 15, 25 read as digits: a scale
+    letter = [ScaleMarker("S", 5.0, markers[0].box)] + markers[1:]
+    failure = fit_scales(arc, letter)
+    assert isinstance(failure, StageFailure) and failure.reason == "too_few_inliers"
+    assert "read as digits" in failure.detail
+
+
 def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
     """10, 150, 200 of a 0..300 dial ("50" misread "10" near the line): the differences 140 and 50
     are no multiples of one step, so the bent line is refused."""
