@@ -55,7 +55,6 @@ QUICK_ENOUGH = 4  # numbers of one progression read at the hints alone that end 
 INNER_SCALE = 0.66  # scale radii: numbers nearer the centre are a secondary scale's (synthetic: main >= 0.69)
 POLAR_DETECT_SCALE = 0.75  # of the strip's size for its text detection: the same 130 of 300 dev renders and 7 of 21
 # real photos refused as at full size, for about half its cost (57 -> ~30 ms on an 875 px strip)
-FACE_DET_SIDE = 384  # px: the quick pass's one detection of the face (its unit, numbers the hints missed)
 OUTER_SCALE = 1.12  # scale radii: two numbers beyond this that the hints missed send the quick pass on
 
 Circle = tuple[float, float, float]
@@ -203,8 +202,7 @@ class ScaleTextReader:
         roi, x0, y0 = _square(image_bgr, circle[0], circle[1], RING[1] * circle[2])
         if not roi.size:
             return []
-        side = min(self.det_side, FACE_DET_SIDE)
-        quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=side)]
+        quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
         quads = [q for q in quads if not any(_explains(b, tuple(q.mean(axis=0)), 0.0) for b in known)]
         if not quads:
             return []

@@ -24,7 +24,7 @@ def session_options(threads: int) -> ort.SessionOptions:
 
     Idle intra-op threads sleep instead of spinning: the pipeline runs four sessions in turn
     (detector, crop model, OCR detector and recogniser), and the threads one session left spinning
-    took the cores from the next. The cold read took 256 ms median with spinning, 193 ms without
+    took the cores from the next. The cold read took 256 ms median with spinning, 191 ms without
     (``bench/bench_read.py``, 2 cores).
     """
     options = ort.SessionOptions()

@@ -167,7 +167,7 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
         return StageFailure(STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
     # A letter taken for a digit does not count towards the minimum: "S" read as 5 beside "15, 25"
     # (a 0..2.5 bar render whose decimal points all went unread) made three agreeing numbers of a
-    # line 10x too steep, 516% off (held-out 000958). The dev sets read the same without them.
+    # line 10x too steep, 516% off (held-out 000958). The dev sets lost no reading to this rule.
     digits = sum(1 for m in model.markers if m.inlier and _read_as_digits(m.text))
     if digits < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers read as digits, need {min_inliers}")
