@@ -139,6 +139,12 @@ def _decimal_point(s: str) -> str | None:
     return s
 
 
+def read_as_digits(text: str) -> bool:
+    """Whether OCR read the number as digits, with no letter taken for one ("O" for 0, "S" for 5)."""
+    parsed = parse_number(text)
+    return bool(parsed) and parsed.confusions == 0
+
+
 def merge_fragments(boxes: Sequence[TextBox], gap: float = 0.6, align: float = 0.35) -> list[TextBox]:
     """Join text boxes that are pieces of one number ("0" + ".6", "1" + "6", "-" + "30").
 

@@ -33,11 +33,15 @@ def read_value(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel, min_conf
     ``margin`` is how far (fraction of the span) past either end the needle may rest (a stop pin sits
     just below the start) before the reading is refused as ``needle_off_scale``.
     """
-    start = scale.unwrap(arc.start_angle)
-    end = scale.unwrap(arc.end_angle)
-    angle = arc.linear(needle.angle)  # read against the neighbouring notches
-    position = (scale.unwrap(angle) - start) / (end - start)
-    if not -margin <= position <= 1 + margin:
+    if scale.full_circle:  # no ends to be beyond: the ends the arc inferred lie inside the scale
+        angle = needle.angle
+        position = (scale.value_at(angle) - scale.min_value) / (scale.max_value - scale.min_value)
+    else:
+        start = scale.unwrap(arc.start_angle)
+        end = scale.unwrap(arc.end_angle)
+        angle = arc.linear(needle.angle)  # read against the neighbouring notches
+        position = (scale.unwrap(angle) - start) / (end - start)
+    if not scale.full_circle and not -margin <= position <= 1 + margin:
         return StageFailure(STAGE, "needle_off_scale", f"needle at {position:+.0%} of the scale span")
     value = float(scale.value_at(angle))
     confidence = _confidence(needle, arc, scale)

@@ -23,7 +23,8 @@ from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.scale_fit import RING_GAP, fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
-from gauged.reader.numbers import parse_number
+from gauged.reader.full_circle import fit_full_circle
+from gauged.reader.numbers import read_as_digits
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
@@ -79,7 +80,12 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
         if isinstance(model, StageFailure):
             if index == 0:
                 if len(rings) == 1:
-                    return model
+                    # Ends inferred inside a scale that has none cut its numbers in two.
+                    circle = fit_full_circle(arc, markers, unit)
+                    if circle is None:
+                        return model
+                    scales.append(circle)
+                    break
                 if not isinstance(whole, StageFailure) and _from_ring(whole, rings[0]) >= 2:
                     # Too few outer numbers for a scale of their own, but with a number of the inner
                     # ring they make one (a "0" printed nearer the centre than "100, 200": synthetic
@@ -168,7 +174,7 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
     # A letter taken for a digit does not count towards the minimum: "S" read as 5 beside "15, 25"
     # (a 0..2.5 bar render whose decimal points all went unread) made three agreeing numbers of a
     # line 10x too steep, 516% off (held-out 000958). The dev sets lost no reading to this rule.
-    digits = sum(1 for m in model.markers if m.inlier and _read_as_digits(m.text))
+    digits = sum(1 for m in model.markers if m.inlier and read_as_digits(m.text))
     if digits < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers read as digits, need {min_inliers}")
     for check in (_irregular, _uncovered, _dropped_decimal_point):
@@ -207,7 +213,7 @@ def _uncovered(model: ScaleModel) -> StageFailure | None:
     values = sorted({m.value for m in model.markers if m.inlier})
     # Numbers read as digits are the evidence; a letter taken for a digit is not: "S" read as 5 beside
     # "15, 20, 25" (a 0.5..2.5 scale whose decimal points all went unread) "covered" the low end.
-    digits = sorted({m.value for m in model.markers if m.inlier and _read_as_digits(m.text)})
+    digits = sorted({m.value for m in model.markers if m.inlier and read_as_digits(m.text)})
     values = digits if len(digits) >= 2 else values
     if len(values) < 2:
         return None
@@ -221,12 +227,6 @@ def _uncovered(model: ScaleModel) -> StageFailure | None:
                             f"numbers {values[0]:g}..{values[-1]:g} (step {step:g}) do not reach the scale ends "
                             f"{model.min_value:.4g}..{model.max_value:.4g}")
     return None
-
-
-def _read_as_digits(text: str) -> bool:
-    """Whether OCR read the number as digits, with no letter taken for one ("O" for 0, "S" for 5)."""
-    parsed = parse_number(text)
-    return parsed is not None and parsed.confusions == 0
 
 
 def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:

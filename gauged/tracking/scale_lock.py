@@ -107,7 +107,13 @@ class ScaleLock:
         return self.locked is not None and stamp_ns - self.locked.locked_ns >= self.recheck_every_ns
 
     def offer(self, box: Box, arc: ScaleArc, scale: ScaleModel, stamp_ns: int) -> bool:
-        """Add a full read. Returns True when this read (re)locked the scale."""
+        """Add a full read. Returns True when this read (re)locked the scale.
+
+        A full-circle scale is not offered: :func:`fuse` rebuilds the scale from the arc's ends, which
+        such a scale has not, so its gauge is read in full (OCR included) on every frame.
+        """
+        if scale.full_circle:
+            return False
         if self.locked is not None:
             if _same_range(self.locked.scale, scale, 0.05) and scale.unit == self.locked.scale.unit:
                 self.locked = replace(self.locked, locked_ns=stamp_ns)  # re-verified

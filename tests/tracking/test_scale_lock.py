@@ -63,3 +63,15 @@ def test_scale_lock_released_after_repeated_movement():
     assert not lock.observe_pivot(None, (128.0, 128.0))
     assert not lock.observe_pivot((150.0, 128.0), (128.0, 128.0))
     assert lock.observe_pivot((150.0, 128.0), (128.0, 128.0)) and not lock.is_locked
+
+
+def test_a_full_circle_scale_is_never_locked():
+    """fuse() rebuilds a scale from the arc's ends, which a full-circle scale has not: such a gauge is
+    read in full on every frame."""
+    from dataclasses import replace
+
+    lock = ScaleLock(frames=2, recheck_every_s=10)
+    for i in range(4):
+        c = candidate()
+        assert not lock.offer(c.box, c.arc, replace(c.scale, full_circle=True), i * S)
+    assert not lock.is_locked and lock.candidates == []
