@@ -65,11 +65,14 @@ def fit_full_circle(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | N
     anchor = int(np.flatnonzero(best)[0])
     predicted = theta[anchor] + (value[best] - value[anchor]) / best_slope
     along = predicted + wrap_to_pi(theta[best] - predicted)
-    slope, intercept = (float(c) for c in np.polyfit(along, value[best], 1))
-    turn = 2 * math.pi * slope
-    steps = round(turn / step)
-    if steps < MIN_STEPS or abs(turn / step - steps) > TURN_TOLERANCE * steps:
+    fitted = float(np.polyfit(along, value[best], 1)[0])
+    steps = round(2 * math.pi * fitted / step)
+    if steps < MIN_STEPS or abs(2 * math.pi * fitted / step - steps) > TURN_TOLERANCE * steps:
         return None
+    # A turn is exactly that many steps: the slope follows from it, and only the phase is fitted.
+    turn = steps * step
+    slope = turn / (2 * math.pi)
+    intercept = float(np.mean(value[best] - slope * along))
     if not (steps - 2) * step - TURN_TOLERANCE * step <= kept[-1] - kept[0] < turn - 0.5 * step:
         return None
     low = math.floor(kept[0] / turn + 1e-9) * turn  # 0 on a 0..10 dial whose "0" went unread
