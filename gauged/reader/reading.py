@@ -41,8 +41,8 @@ def read_value(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel, min_conf
         end = scale.unwrap(arc.end_angle)
         angle = arc.linear(needle.angle)  # read against the neighbouring notches
         position = (scale.unwrap(angle) - start) / (end - start)
-    if not scale.full_circle and not -margin <= position <= 1 + margin:
-        return StageFailure(STAGE, "needle_off_scale", f"needle at {position:+.0%} of the scale span")
+        if not -margin <= position <= 1 + margin:
+            return StageFailure(STAGE, "needle_off_scale", f"needle at {position:+.0%} of the scale span")
     value = float(scale.value_at(angle))
     confidence = _confidence(needle, arc, scale)
     if confidence < min_confidence:

@@ -74,34 +74,41 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
         whole = _fit_ring(arc, markers, unit, min_inliers)
         if not isinstance(whole, StageFailure) and _spans_both(whole, rings):
             return [whole]  # one scale whose numbers only looked like two rings (a skewed ellipse)
-    scales: list[ScaleModel] = []
-    for index, ring in enumerate(rings):
-        model = _fit_ring(arc, ring, unit, min_inliers)
-        if isinstance(model, StageFailure):
-            if index == 0:
-                if len(rings) == 1:
-                    # Ends inferred inside a scale that has none cut its numbers in two.
-                    circle = fit_full_circle(arc, markers, unit)
-                    if circle is None:
-                        return model
-                    scales.append(circle)
-                    break
-                if not isinstance(whole, StageFailure) and _from_ring(whole, rings[0]) >= 2:
-                    # Too few outer numbers for a scale of their own, but with a number of the inner
-                    # ring they make one (a "0" printed nearer the centre than "100, 200": synthetic
-                    # dev 000077): it is checked as a lone ring is.
-                    rings, scales = [markers], [whole]
-                    break
-                return replace(model, detail=f"outer scale: {model.detail}")
-            continue
-        scales.append(model)
-    if len(rings) == 1:  # a lone ring must be the main scale, and the printed numbers must agree
+    lone = len(rings) == 1
+    outer = _fit_ring(arc, rings[0], unit, min_inliers)
+    if isinstance(outer, StageFailure):
+        rescued = _rescue(arc, markers, rings, whole, unit)
+        if rescued is None:
+            return outer if lone else replace(outer, detail=f"outer scale: {outer.detail}")
+        scales, lone = [rescued], True  # checked as a lone ring is
+    else:
+        scales = [outer]
+        inner = None if lone else _fit_ring(arc, rings[1], unit, min_inliers)
+        if inner is not None and not isinstance(inner, StageFailure):
+            scales.append(inner)
+    if lone:  # a lone ring must be the main scale, and the printed numbers must agree
         failure = _secondary_only(arc, scales[0], hints)
         if failure is None and hints is not None:
             failure = _off_grid(arc, scales[0], hints)
         if failure is not None:
             return failure
     return scales
+
+
+def _rescue(arc: ScaleArc, markers: list[ScaleMarker], rings: list[list[ScaleMarker]],
+            whole: ScaleModel | StageFailure | None, unit: str | None) -> ScaleModel | None:
+    """A scale for numbers whose outer ring gave none, or None.
+
+    A lone ring may be a full-circle scale: ends inferred inside a scale that has none cut its
+    numbers in two (:func:`gauged.reader.full_circle.fit_full_circle`). Two outer numbers too few for
+    a scale of their own make one with a number of the inner ring on their line (a "0" printed
+    nearer the centre than "100, 200": synthetic dev 000077).
+    """
+    if len(rings) == 1:
+        return fit_full_circle(arc, markers, unit)
+    if whole is not None and not isinstance(whole, StageFailure) and _from_ring(whole, rings[0]) >= 2:
+        return whole
+    return None
 
 
 def _secondary_only(arc: ScaleArc, model: ScaleModel, hints: np.ndarray | None = None) -> StageFailure | None:
