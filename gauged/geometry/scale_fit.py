@@ -220,7 +220,8 @@ def fit_scale_model(
     )
     if not fit:
         return fit
-    at_notches = sorted(fit.slope * unwrap(a, zero) + fit.intercept for a in (start_angle, end_angle))
+    # Rounded off float noise: a scale from 0 is not shown as -1.8e-15..10.
+    at_notches = sorted(round(fit.slope * unwrap(a, zero) + fit.intercept, 12) + 0.0 for a in (start_angle, end_angle))
     return ScaleModel(
         ellipse=ellipse,
         slope=fit.slope,

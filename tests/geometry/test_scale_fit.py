@@ -190,3 +190,12 @@ def test_unwrapped_marker_angles_are_continuous_across_the_image_branch_cut() ->
     zero = wrap_angle(start, end)
     raw = wrap_to_pi(np.radians(np.linspace(135.0, 405.0, 7)))
     assert np.all(np.diff(unwrap(raw, zero)) > 0.0)
+
+
+def test_scale_ends_carry_no_float_noise() -> None:
+    """A scale from 0 reads 0..10, not -1.8e-15..10 (which `gauged read` printed for a real dial)."""
+    start, end = math.radians(135.0), math.radians(45.0)
+    for values in (np.linspace(0.0, 10.0, 6), np.linspace(0.0, 1.0, 11), np.linspace(-1.0, 0.0, 5)):
+        model = fit_scale_model(ELLIPSE, _markers(ELLIPSE, start, end, values), start, end)
+        assert (model.min_value, model.max_value) == (values[0], values[-1])
+        assert all(math.copysign(1.0, v) == 1.0 for v in (model.min_value, model.max_value) if v == 0)  # no "-0"
