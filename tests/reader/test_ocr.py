@@ -275,6 +275,27 @@ def test_split_spaced_cuts_two_numbers_read_as_one_box():
     assert [p.text for p in _split_spaced([TextBox("1 6", 0.9, quad)])] == ["1 6"]  # one number, kept whole
 
 
+def test_dedupe_prefers_a_confident_whole_number_to_its_part_read_alone():
+    """The ink box at a hint held only the "5" of a tilted "25" and read it with a higher score than
+    the detector's "25" (synthetic dev 000098); the whole number wins. A doubtful long reading
+    ("4600" for 40 and 60) or a loose box far larger than the part does not."""
+    from gauged.reader.ocr import _dedupe
+    from gauged.reader.ocr_engine import TextBox
+
+    def box(text, score, x0, y0, x1, y1):
+        return TextBox(text, score, np.float32([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+
+    whole, part = box("25", 0.99, 300, 351, 352, 408), box("5", 1.0, 314, 361, 341, 385)
+    assert [b.text for b in _dedupe([part, whole])] == ["25"]
+    assert [b.text for b in _dedupe([box("10", 1.0, 100, 100, 140, 130), box("0", 0.9, 120, 102, 138, 128)])] == ["10"]
+    doubtful = box("4600", 0.67, 0, 0, 100, 30)
+    assert {b.text for b in _dedupe([doubtful, box("60", 1.0, 50, 2, 98, 28)])} == {"4600", "60"}
+    loose = box("20", 0.94, 50, 108, 206, 268)  # 160 px around a 40 px "20" and the "0" below it
+    assert [b.text for b in _dedupe([loose, box("0", 0.99, 105, 167, 142, 211)])] == ["0"]  # the better score
+    same = box("140.", 0.92, 0, 0, 60, 30)  # the same digits: the better score stays, as before
+    assert [b.text for b in _dedupe([same, box("140", 0.99, 2, 2, 58, 28)])] == ["140"]
+
+
 def test_quick_pass_gives_way_when_numbers_outside_the_ring_were_not_hinted(reader):
     """A degC ring inside a degF one (the real thermometer of gauge-readings-dev): the crop model
     hinted only the inner numbers. The quick pass reads them, but the unhinted numbers outside the
