@@ -31,10 +31,13 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
+from gauged.geometry.angles import wrap_to_pi
+from gauged.geometry.dial_frame import dial_angle
 from gauged.geometry.rectify import rectifying_homography, unrectify_points, warp_rectified
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.numbers import filter_progression, merge_fragments, parse_number
@@ -52,6 +55,9 @@ HINT_WINDOW = 0.6  # side of the local-detection window around a hint, in scale 
 POLAR_BELOW = 4  # read the unwrapped ring too when the first pass gives fewer progression numbers
 LOCAL_DETECTIONS = 1  # hints still unexplained after the ink reads that get a text detection of their own (2
 # refused the same 135 of 300 dev renders and 6 of 21 real photos for 59 ms more CPU per read; 0 lost a real one)
+UPRIGHT_BELOW = 4  # numbers of one progression below which the dial is read again the image's way up
+UPRIGHT_TURN = math.radians(30.0)  # ... when that turns the view by more than this (text upright on the
+# face of a dial whose gap is not at the bottom: 12% of the engine's dials; recognition fails past ~45 deg)
 PART_SURE = 0.9  # score of a text that its part, read alone inside it, gives way to (_dedupe)
 PART_INSIDE = 0.8  # share of the part's box inside the whole's
 PART_AREA = 6.0  # the whole's box at most this many times the part's (tilted "25" about "5": 4.6)
@@ -214,7 +220,7 @@ class ScaleTextReader:
         return [TextBox(rec.text, rec.score, np.asarray(q, np.float32), rec.digits, rec.digits_score)
                 for q, rec in zip(quads, recs, strict=True) if rec.text and rec.score >= self.min_score]
 
-    def read_quick(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None
+    def read_quick(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None, gap: float = math.pi / 2
                    ) -> tuple[list[TextBox] | None, list[TextBox]]:
         """The quick pass: ``(numbers and unit, numbers)`` when the hints alone give enough numbers,
         else ``(None, the numbers they gave)`` for the full pass to keep.
@@ -229,7 +235,7 @@ class ScaleTextReader:
         # Numbers deep inside the ring belong to an inner, secondary scale: the main scale's numbers
         # were not hinted, so only the full pass can find them.
         near_ring = [t for t in numbers if _main_scale(t, circle)]
-        if _progression_size(near_ring, circle) < QUICK_ENOUGH:
+        if _progression_size(near_ring, circle, gap) < QUICK_ENOUGH:
             return None, numbers
         others = self.read_face_texts(image_bgr, circle, numbers)
         outside = [t for t in others if parse_number(t.text) and math.dist(t.center, circle[:2]) > OUTER_SCALE * circle[2]]
@@ -241,12 +247,12 @@ class ScaleTextReader:
         return _dedupe(numbers + missed) + [t for t in others if match_unit(t.text)], numbers
 
     def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None,
-                  known: Sequence[TextBox] = ()) -> list[TextBox]:
+                  known: Sequence[TextBox] = (), gap: float = math.pi / 2) -> list[TextBox]:
         """:meth:`read` on a rectified dial, plus :meth:`read_polar`'s numbers when the first pass
         yields fewer than :data:`POLAR_BELOW` numbers of one progression (radially printed scales)."""
         texts = self.read(image_bgr, circle, hints, known)
-        if self.polar_fallback and _progression_size(texts, circle) < POLAR_BELOW:
-            polar = [b for b in self.read_polar(image_bgr, circle) if parse_number(b.text)]
+        if self.polar_fallback and _progression_size(texts, circle, gap) < POLAR_BELOW:
+            polar = [b for b in self.read_polar(image_bgr, circle, gap) if parse_number(b.text)]
             texts = _split_spaced(_dedupe(texts + polar))
         return texts
 
@@ -271,6 +277,28 @@ class ScaleTextReader:
         return out
 
     # -- the pipeline stage -------------------------------------------------------------------
+    def _read_view(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None,
+                   down: float) -> _View:
+        """The texts of the dial rectified with dial angle ``down`` at the bottom (the quick pass,
+        then the full pass if that is not enough)."""
+        size = RECTIFIED_SIZE
+        radius = RECTIFIED_RADIUS * size
+        matrix = rectifying_homography(arc.ellipse, down, size, radius=radius, centre=arc.centre)
+        if detail is None:
+            rectified = warp_rectified(crop, matrix, size)
+        else:  # detail px -> crop px is a pure scaling of the same square
+            to_crop = np.diag([crop.shape[1] / detail.shape[1], crop.shape[0] / detail.shape[0], 1.0])
+            rectified = warp_rectified(detail, matrix @ to_crop, size)
+        circle = (size / 2.0, size / 2.0, radius)
+        gap = float(wrap_to_pi(math.pi / 2 + arc.zero_angle - down))  # where the scale's gap lies in the view
+        rhints = None
+        if hints is not None and len(hints):
+            rhints = cv2.perspectiveTransform(np.asarray(hints, np.float64).reshape(-1, 1, 2), matrix).reshape(-1, 2)
+        texts, quick = self.read_quick(rectified, circle, rhints, gap)
+        if texts is None:
+            texts = self.read_dial(rectified, circle, rhints, known=quick, gap=gap)
+        return _View(texts, matrix, circle, gap)
+
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
                      ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
         """Scale numbers (markers with boxes in ``crop`` pixels) and the unit of the crop's dial.
@@ -283,21 +311,14 @@ class ScaleTextReader:
         resolution (any size): the rectified view is sampled from it. Failures: ``no_text``,
         ``no_numbers``.
         """
-        size = RECTIFIED_SIZE
-        radius = RECTIFIED_RADIUS * size
-        matrix = rectifying_homography(arc.ellipse, arc.zero_angle, size, radius=radius, centre=arc.centre)
-        if detail is None:
-            rectified = warp_rectified(crop, matrix, size)
-        else:  # detail px -> crop px is a pure scaling of the same square
-            to_crop = np.diag([crop.shape[1] / detail.shape[1], crop.shape[0] / detail.shape[0], 1.0])
-            rectified = warp_rectified(detail, matrix @ to_crop, size)
-        circle = (size / 2.0, size / 2.0, radius)
-        rhints = None
-        if hints is not None and len(hints):
-            rhints = cv2.perspectiveTransform(np.asarray(hints, np.float64).reshape(-1, 1, 2), matrix).reshape(-1, 2)
-        texts, quick = self.read_quick(rectified, circle, rhints)
-        if texts is None:
-            texts = self.read_dial(rectified, circle, rhints, known=quick)
+        view = self._read_view(crop, arc, hints, detail, arc.zero_angle)
+        upright = _image_down(arc)
+        if (_progression_size(view.texts, view.circle, view.gap) < UPRIGHT_BELOW
+                and abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN):
+            other = self._read_view(crop, arc, hints, detail, upright)
+            if _progression_size(other.texts, other.circle, other.gap) > _progression_size(view.texts, view.circle, view.gap):
+                view = other
+        texts, circle, matrix = view.texts, view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, "no_text", "no text found on the rectified dial")
         unit = read_unit(texts, circle)
@@ -306,12 +327,12 @@ class ScaleTextReader:
             return StageFailure(STAGE, "no_numbers", f"{len(texts)} text(s) read, none a scale number: "
                                 + ", ".join(repr(t.text) for t in texts[:6]))
         if self.progression:
-            kept = keep_progressions(markers, circle)
+            kept = keep_progressions(markers, circle, view.gap)
             # Decimal numbers left out stay on as outliers: on a scale whose other numbers lost their
             # decimal points they are the evidence (gauged.reader.scale, dropped_decimal_point).
-            taken = {id(m) for m in kept}
+            taken = {m.box for m in kept}  # kept markers are copies (their value set): matched by box
             height = float(np.median([m.box[3] - m.box[1] for m in kept]))
-            markers = kept + [m for m in markers if id(m) not in taken and m.value != round(m.value)
+            markers = kept + [m for m in markers if m.box not in taken and m.value != round(m.value)
                               and m.box[3] - m.box[1] <= 1.5 * height]
         out = []
         for m in markers:  # back to crop pixels: the box keeps its size around the mapped centre
@@ -321,6 +342,24 @@ class ScaleTextReader:
             hw, hh = np.ptp(corners, axis=0) / 2
             out.append(ScaleMarker(m.text, m.value, (cx - hw, cy - hh, cx + hw, cy + hh), None, None, m.score))
         return out, (unit.unit if unit else None)
+
+
+@dataclass(frozen=True)
+class _View:
+    """The texts read on one rectified view of a dial: ``matrix`` maps crop px to the view, whose
+    scale circle is ``circle`` and whose scale gap lies at image angle ``gap``."""
+
+    texts: list[TextBox]
+    matrix: np.ndarray
+    circle: Circle
+    gap: float
+
+
+def _image_down(arc: ScaleArc) -> float:
+    """The dial angle that points down the image from the dial centre: a view with it at the bottom
+    shows text printed upright on an upright dial upright, wherever the scale's gap is."""
+    cx, cy = arc.centre
+    return float(dial_angle(arc.ellipse, np.array([[cx, cy + arc.ellipse.b]]), arc.centre)[0])
 
 
 def scale_markers(texts: Sequence[TextBox], circle: Circle) -> list[ScaleMarker]:
@@ -342,25 +381,27 @@ def _radius(m: ScaleMarker, circle: Circle) -> float:
     return math.dist(((m.box[0] + m.box[2]) / 2, (m.box[1] + m.box[3]) / 2), circle[:2])
 
 
-def _progression_size(texts: list[TextBox], circle: Circle) -> int:
-    """How many of ``texts`` the best arithmetic progression keeps (0 when none)."""
+def _progression_size(texts: list[TextBox], circle: Circle, gap: float = math.pi / 2) -> int:
+    """How many of ``texts`` the best arithmetic progression keeps (0 when none); ``gap`` is the
+    image angle of the scale's gap."""
     markers = scale_markers(texts, circle)
     if len(markers) < 3:
         return len(markers)
-    fit = filter_progression(markers, radii=[_radius(m, circle) for m in markers])
+    fit = filter_progression(markers, gap_angle=gap, radii=[_radius(m, circle) for m in markers])
     return len(fit.kept) if fit else 0
 
 
-def keep_progressions(markers: list[ScaleMarker], circle: Circle) -> list[ScaleMarker]:
+def keep_progressions(markers: list[ScaleMarker], circle: Circle, gap: float = math.pi / 2) -> list[ScaleMarker]:
     """Markers of up to two scales (each an arithmetic progression; the second from what the first
-    rejected, for dials with concentric scales), or all markers when no progression is found."""
-    fit = filter_progression(markers, radii=[_radius(m, circle) for m in markers])
+    rejected, for dials with concentric scales), or all markers when no progression is found.
+    ``gap`` is the image angle of the scale's gap."""
+    fit = filter_progression(markers, gap_angle=gap, radii=[_radius(m, circle) for m in markers])
     if not fit:
         return markers
     kept = list(fit.kept)
     rest = [m for m, reason in fit.rejected if reason in ("off_progression", "radius_outlier")]
     if len(rest) >= 3:
-        second = filter_progression(rest, radii=[_radius(m, circle) for m in rest])
+        second = filter_progression(rest, gap_angle=gap, radii=[_radius(m, circle) for m in rest])
         if second:
             kept += list(second.kept)
     return kept

@@ -35,15 +35,15 @@ def reader():
 
 
 def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), scale=0.9, unit="bar",
-                radius=0.78, img=None):
+                radius=0.78, img=None, start_deg=135.0):
     """A rectified dial: ticks on CIRCLE, numbers at ``radius`` r (0.78) over 270 degrees clockwise
-    from lower left (gap at the bottom), upright or radial (tops outward), drawn on a new face or on
-    ``img``. Returns image and number centres."""
+    from ``start_deg`` (lower left: the gap at the bottom), upright or radial (tops outward), drawn on
+    a new face or on ``img``. Returns image and number centres."""
     img = np.full((SIZE, SIZE, 3), face, np.uint8) if img is None else img.copy()
     cx, cy, r = CIRCLE
     centres = []
     for i, v in enumerate(values):
-        a = math.radians(135 + 270 * i / (len(values) - 1))
+        a = math.radians(start_deg + 270 * i / (len(values) - 1))
         u = np.array([math.cos(a), math.sin(a)])
         cv2.line(img, tuple(np.int32((cx, cy) + r * u)), tuple(np.int32((cx, cy) + 1.1 * r * u)), ink, 3)
         text = f"{v:g}"
@@ -153,6 +153,30 @@ def test_read_markers_reads_rendered_dials_in_place(reader):
         checked += len(correct) >= 3
     assert checked >= 4, "OCR read at least three right numbers on fewer than four of six renders"
     assert correct_total >= 0.85 * read_total, f"{correct_total} of {read_total} numbers read are the dial's"
+
+
+def test_read_markers_reads_upright_text_of_a_dial_whose_gap_is_not_at_the_bottom(reader, monkeypatch):
+    """Numbers printed upright on a face whose scale gap is at the top (synthetic dev 000111): turned
+    gap-down, the numbers stand on their heads ("0.8" read "8", "1.6" read "9"); the view the image's
+    way up reads them."""
+    import gauged.reader.ocr as ocr
+
+    values = [0, 0.4, 0.8, 1.2, 1.6]
+    img, centres = render_dial(values, scale=0.8, unit="", start_deg=315.0)
+    e = Ellipse(*CIRCLE[:2], CIRCLE[2], CIRCLE[2], 0.0)
+    start, end = math.radians(-45.0), math.radians(-135.0)  # the gap at the top, -90 degrees
+    arc = ScaleArc(e, e.center, start, end, wrap_angle(start, end), np.zeros((0, 2)), 0.0, False)
+
+    def right(read):
+        assert not isinstance(read, StageFailure), read
+        markers, _ = read
+        return sum(1 for m in markers if any(abs(m.value - v) < 1e-9 and np.linalg.norm(
+            np.array([(m.box[0] + m.box[2]) / 2, (m.box[1] + m.box[3]) / 2]) - c) < 20 for v, c in zip(values, centres)))
+
+    assert right(reader.read_markers(img, arc, centres)) >= 4
+    monkeypatch.setattr(ocr, "UPRIGHT_BELOW", 0)  # gap-down view only, as before
+    read = reader.read_markers(img, arc, centres)
+    assert isinstance(read, StageFailure) or right(read) < 3
 
 
 def test_read_markers_no_text_on_a_blank_dial(reader):
