@@ -17,6 +17,7 @@ torch forward pass ran them, and each torch BatchNorm that directly follows a co
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +54,18 @@ def _onnx_convs(path: Path) -> list[tuple[np.ndarray, np.ndarray | None]]:
         bias = tensors[node.input[2]] if len(node.input) > 2 and node.input[2] else None
         convs.append((weight, bias))
     return convs
+
+
+def initialise(model: nn.Module, init: Path, calibration: Callable[[], torch.Tensor]) -> str:
+    """Load ``model``'s starting weights from ``init``: a shipped ONNX export (``.onnx``, its
+    BatchNorms calibrated on the batch ``calibration()`` returns) or a training checkpoint. Returns
+    what was done, for the log. Build the model without pretrained weights for an ONNX start."""
+    if init.suffix == ".onnx":
+        batch = calibration()
+        load_from_onnx(model, init, batch)
+        return f"initialised from the ONNX export {init} (BatchNorm calibrated on {len(batch)} inputs)"
+    model.load_state_dict(torch.load(init, map_location="cpu", weights_only=False)["model"])
+    return f"initialised from {init}"
 
 
 def load_from_onnx(model: nn.Module, path: Path, calibration: torch.Tensor) -> None:

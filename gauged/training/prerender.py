@@ -106,6 +106,25 @@ def _render_scene(args: tuple[int, int]) -> DetectorSample:
     return DetectorSample(letterbox.apply(image), scaled, f"dial_renderer/scene/{seed}")
 
 
+def _render_closeup(args: tuple[int, int]) -> DetectorSample:
+    """A close-up of the full engine (:func:`gauged.synth.crop.render_crop`: one gauge filling most of
+    a square, often cut by its edges) resized to ``size``, with the face box clipped to the image."""
+    from gauged.synth.crop import render_crop
+
+    seed, size = args
+    sample = render_crop(seed, 448, masks=False)
+    x0, y0, x1, y1 = sample.truth["face_box"]
+    box = np.clip([x0, y0, x1, y1], 0, 448) * (size / 448)
+    return DetectorSample(cv2.resize(sample.image, (size, size), interpolation=cv2.INTER_AREA), [list(box)],
+                          f"synth/closeup/{seed}")
+
+
+def closeup_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[DetectorSample]:
+    """Engine close-ups (one gauge each) for seeds ``first_seed ..``, in seed order."""
+    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
+    return _in_pool(_render_closeup, jobs, "close-ups", 8, workers)
+
+
 def synthetic_scene_samples(first_seed: int, count: int, size: int, workers: int = 2) -> Iterator[DetectorSample]:
     """Rendered scenes (letterboxed to ``size``) for seeds ``first_seed ..``, in seed order."""
     jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
@@ -132,6 +151,11 @@ def main(argv: list[str] | None = None) -> int:
     scenes.add_argument("--count", type=int, required=True)
     scenes.add_argument("--size", type=int, default=320)
     scenes.add_argument("--out", type=Path, required=True)
+    closeups = sub.add_parser("closeups", help="synthetic close-ups of one gauge (the full engine) -> detector shard")
+    closeups.add_argument("--seed", type=int, default=20000)
+    closeups.add_argument("--count", type=int, required=True)
+    closeups.add_argument("--size", type=int, default=320)
+    closeups.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     if args.what == "needles":
@@ -146,6 +170,9 @@ def main(argv: list[str] | None = None) -> int:
         written = write_detector_shard(args.out, synthetic_scene_samples(args.seed, args.count, args.size), args.count,
                                        args.size)
         log.info("wrote %d synthetic scenes to %s", written, args.out)
+    elif args.what == "closeups":
+        written = write_detector_shard(args.out, closeup_samples(args.seed, args.count, args.size), args.count, args.size)
+        log.info("wrote %d synthetic close-ups to %s", written, args.out)
     return 0
 
 

@@ -186,16 +186,11 @@ def main(argv: list[str] | None = None) -> int:
     # channels_last makes the depthwise convolutions' backward pass ~1.7x faster on CPU (measured).
     from_onnx = args.init is not None and args.init.suffix == ".onnx"
     model = CropNet(args.size, pretrained=not (args.scratch or from_onnx)).to(memory_format=torch.channels_last)
-    if from_onnx:
-        from gauged.training.from_onnx import load_from_onnx
+    if args.init:
+        from gauged.training.from_onnx import initialise
 
-        calibration = torch.from_numpy(np.stack([augmented(shards[0].sample(i), args.size, None, 0.0)[0]
-                                                 for i in range(min(48, len(shards[0])))]))
-        load_from_onnx(model, args.init, calibration)
-        log.info("initialised from the ONNX export %s (BatchNorm calibrated on %d crops)", args.init, len(calibration))
-    elif args.init:
-        model.load_state_dict(torch.load(args.init, map_location="cpu", weights_only=False)["model"])
-        log.info("initialised from %s", args.init)
+        log.info(initialise(model, args.init, lambda: torch.from_numpy(np.stack(
+            [augmented(shards[0].sample(i), args.size, None, 0.0)[0] for i in range(min(48, len(shards[0])))]))))
     log.info("crop model: %d parameters, %s init; %s training samples", count_parameters(model),
              args.init or ("scratch" if args.scratch else "ImageNet"), [len(s) for s in shards])
     steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch

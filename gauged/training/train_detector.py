@@ -1,7 +1,8 @@
 """Train the gauge detector (CenterNet on an EfficientNet-Lite0 encoder) and export ONNX.
 
-    python -m gauged.training.train_detector --synth data/det-synth-320 \
-        --real ../shared/datasets/substation-dials --real-fold A --run runs/det --export runs/det/detector.onnx
+    python -m gauged.training.train_detector --synth data/det-synth-320 [data/det-closeup-320 ...] \
+        --real ../shared/datasets/substation-dials --real-fold A --run runs/det --export runs/det/detector.onnx \
+        [--init gauged/models/detector.onnx]
 
 Real substation frames are split into two folds by frame number (A: first half, B: second half, so
 neighbouring frames of one camera stay together); the model trains on synthetic scenes plus one fold
@@ -61,16 +62,17 @@ def to_tensor(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(image[:, :, ::-1].astype(np.float32).transpose(2, 0, 1) / 255.0)
 
 
-def make_batches(shard, real: list[tuple[DialSample, np.ndarray]], size: int, batch: int, seed: int, real_repeats: int):
+def make_batches(shards, real: list[tuple[DialSample, np.ndarray]], size: int, batch: int, seed: int, real_repeats: int):
     def batches(epoch: int):
         rng = np.random.default_rng(seed * 1000 + epoch)
-        entries = [("s", i) for i in range(len(shard))] + [("r", i) for i in range(len(real)) for _ in range(real_repeats)]
+        entries = [(k, i) for k, shard in enumerate(shards) for i in range(len(shard))]
+        entries += [("r", i) for i in range(len(real)) for _ in range(real_repeats)]
         order = rng.permutation(len(entries))
         for start in range(0, len(order) - batch + 1, batch):
             xs, ms, ws = [], [], []
             for kind, index in (entries[k] for k in order[start:start + batch]):
-                if kind == "s":
-                    sample = shard.sample(index)
+                if kind != "r":
+                    sample = shards[kind].sample(index)
                     image = photometric(sample.image, rng) if rng.random() < 0.5 else sample.image
                     boxes = np.asarray(sample.boxes, float).reshape(-1, 4)
                 else:
@@ -97,7 +99,8 @@ def validate_detector(model, frames: list[tuple[DialSample, np.ndarray]], size: 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--synth", type=Path, required=True, help="synthetic detector shard")
+    parser.add_argument("--synth", type=Path, nargs="+", required=True,
+                        help="synthetic detector shards (scenes, close-ups)")
     parser.add_argument("--real", type=Path, help="substation-dials folder")
     parser.add_argument("--real-fold", choices=("A", "B", "all"), default="A", help="real fold to train on")
     parser.add_argument("--real-repeats", type=int, default=8, help="times each real frame appears per epoch")
@@ -107,12 +110,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--batch", type=int, default=16)
     parser.add_argument("--lr", type=float, default=2e-3)
     parser.add_argument("--scratch", action="store_true")
+    parser.add_argument("--init", type=Path, help="start from this checkpoint's weights, or from a shipped ONNX "
+                        "export of the same architecture (gauged/models/detector.onnx)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--export", type=Path)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     torch.set_num_threads(args.threads)
-    shard = open_detector_shard(args.synth)
+    shards = [open_detector_shard(path) for path in args.synth]
     real_train, real_val = [], []
     if args.real:
         dials = load_substation_dials(args.real)
@@ -121,11 +126,18 @@ def main(argv: list[str] | None = None) -> int:
             real_train, real_val = load(dials), load(dials)
         else:
             real_train, real_val = load(fold(dials, args.real_fold)), load(fold(dials, "B" if args.real_fold == "A" else "A"))
-    model = DetNet(args.size, pretrained=not args.scratch).to(memory_format=torch.channels_last)
+    from_onnx = args.init is not None and args.init.suffix == ".onnx"
+    model = DetNet(args.size, pretrained=not (args.scratch or from_onnx)).to(memory_format=torch.channels_last)
+    if args.init:
+        from gauged.training.from_onnx import initialise
+
+        log.info(initialise(model, args.init, lambda: torch.from_numpy(np.stack(
+            [to_tensor(shards[0].sample(i).image) for i in range(min(48, len(shards[0])))]))))
+    synthetic = sum(len(shard) for shard in shards)
     log.info("detector: %d parameters; %d synthetic + %d real frames (x%d), %d validation frames",
-             count_parameters(model), len(shard), len(real_train), args.real_repeats, len(real_val))
-    steps = (len(shard) + len(real_train) * args.real_repeats) // args.batch
-    best = train(model, make_batches(shard, real_train, args.size, args.batch, 0, args.real_repeats), steps,
+             count_parameters(model), synthetic, len(real_train), args.real_repeats, len(real_val))
+    steps = (synthetic + len(real_train) * args.real_repeats) // args.batch
+    best = train(model, make_batches(shards, real_train, args.size, args.batch, 0, args.real_repeats), steps,
                  lambda m, b: detector_loss(m(b[0]), b[1], b[2]), lambda m: validate_detector(m, real_val, args.size),
                  TrainSettings(epochs=args.epochs, lr=args.lr), args.run)
     log.info("best: %s", json.dumps(best))
@@ -136,7 +148,8 @@ def main(argv: list[str] | None = None) -> int:
         model.load_state_dict(state["model"])
         export_onnx(model, args.size, args.export, {"kind": "detector", "size": args.size, "stride": STRIDE,
                                                     "metrics": best, "real_fold": args.real_fold,
-                                                    "init": "scratch" if args.scratch else "imagenet"})
+                                                    "synth": [str(path) for path in args.synth],
+                                                    "init": str(args.init) if args.init else ("scratch" if args.scratch else "imagenet")})
     return 0
 
 

@@ -85,3 +85,22 @@ def test_synthetic_needle_masks_are_widened_to_the_annotators_convention_and_rea
     real = CropSample(np.zeros((SIZE, SIZE, 3), np.uint8), {}, needle, "needle-polygons/train/a.jpg")
     assert widened_needle(real, 1) is real
     assert widened_needle(CropSample(real.image, {}, None, "synth/8"), 1).needle is None
+
+
+def test_detector_batches_mix_scene_and_close_up_shards(tmp_path):
+    """The detector trains on several synthetic shards at once: dial_renderer scenes and the engine's
+    close-ups of one gauge, whose face box lies in the frame."""
+    from gauged.training.prerender import _render_closeup, _render_scene
+    from gauged.training.shards import open_detector_shard, write_detector_shard
+    from gauged.training.train_detector import make_batches
+
+    closeups = [_render_closeup((seed, SIZE)) for seed in (1, 2)]
+    for sample in closeups:
+        (x0, y0, x1, y1), = sample.boxes
+        assert 0 <= x0 < x1 <= SIZE and 0 <= y0 < y1 <= SIZE and (x1 - x0) * (y1 - y0) > 0.1 * SIZE**2
+    write_detector_shard(tmp_path / "closeups", iter(closeups), 2, SIZE)
+    write_detector_shard(tmp_path / "scenes", iter([_render_scene((seed, SIZE)) for seed in (1, 2)]), 2, SIZE)
+    shards = [open_detector_shard(tmp_path / name) for name in ("scenes", "closeups")]
+    (x, maps, weight), = list(make_batches(shards, [], SIZE, 4, 0, 0)(0))
+    assert x.shape == (4, 3, SIZE, SIZE) and maps.shape == (4, 5, SIZE // 8, SIZE // 8)
+    assert float(weight.sum()) >= 2  # at least the two close-ups' centres
