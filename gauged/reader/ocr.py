@@ -314,10 +314,10 @@ class ScaleTextReader:
         """
         view = self._read_view(crop, arc, hints, detail, arc.zero_angle)
         upright = _image_down(arc)
-        if (_progression_size(view.texts, view.circle, view.gap) < UPRIGHT_BELOW
-                and abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN):
+        agreeing = view.agreeing()
+        if agreeing < UPRIGHT_BELOW and abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN:
             other = self._read_view(crop, arc, hints, detail, upright)
-            if _progression_size(other.texts, other.circle, other.gap) > _progression_size(view.texts, view.circle, view.gap):
+            if other.agreeing() > agreeing:
                 view = other
         texts, circle, matrix = view.texts, view.circle, view.matrix
         if not texts:
@@ -354,6 +354,10 @@ class _View:
     matrix: np.ndarray
     circle: Circle
     gap: float
+
+    def agreeing(self) -> int:
+        """How many of the numbers read form the best arithmetic progression."""
+        return _progression_size(self.texts, self.circle, self.gap)
 
 
 def _image_down(arc: ScaleArc) -> float:
