@@ -108,13 +108,14 @@ def _render_scene(args: tuple[int, int]) -> DetectorSample:
 
 def _render_closeup(args: tuple[int, int]) -> DetectorSample:
     """A close-up of the full engine (:func:`gauged.synth.crop.render_crop`: one gauge filling most of
-    a square, often cut by its edges) resized to ``size``, with the face box clipped to the image."""
+    a square, often cut by its edges) resized to ``size``, boxed as the real substation frames are: the
+    whole visible gauge front and case, clipped to the image (the face box alone, tried first, pulled
+    the substation fold-B IoU from 0.896 to 0.826 and made crops that cut off the bezel)."""
     from gauged.synth.crop import render_crop
 
     seed, size = args
     sample = render_crop(seed, 448, masks=False)
-    x0, y0, x1, y1 = sample.truth["face_box"]
-    box = np.clip([x0, y0, x1, y1], 0, 448) * (size / 448)
+    box = np.asarray(sample.truth["box"], float) * (size / 448)
     return DetectorSample(cv2.resize(sample.image, (size, size), interpolation=cv2.INTER_AREA), [list(box)],
                           f"synth/closeup/{seed}")
 

@@ -89,7 +89,7 @@ def test_synthetic_needle_masks_are_widened_to_the_annotators_convention_and_rea
 
 def test_detector_batches_mix_scene_and_close_up_shards(tmp_path):
     """The detector trains on several synthetic shards at once: dial_renderer scenes and the engine's
-    close-ups of one gauge, whose face box lies in the frame."""
+    close-ups of one gauge, boxed whole (front and case) inside the frame."""
     from gauged.training.prerender import _render_closeup, _render_scene
     from gauged.training.shards import open_detector_shard, write_detector_shard
     from gauged.training.train_detector import make_batches
