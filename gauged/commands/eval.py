@@ -41,6 +41,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         epilog="example: gauged eval models --data ../shared/datasets --synth data/crop-val")
     models.add_argument("--data", type=Path, required=True, help="the shared datasets folder")
     models.add_argument("--synth", type=Path, help="synthetic validation crop shard (notch metrics)")
+    models.add_argument("--closeups", type=Path,
+                        help="rendered close-ups with labels.jsonl (gauged synth images --kind crop): detector figures")
     models.add_argument("--json", action="store_true")
     models.add_argument("--threads", type=int, default=2)
     models.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models")
@@ -99,7 +101,7 @@ def run_models(args: argparse.Namespace) -> int:
     from gauged.evaluation.models import evaluate_models, format_models
 
     try:
-        result = evaluate_models(args.data, args.synth, args.threads, args.models)
+        result = evaluate_models(args.data, args.synth, args.threads, args.models, args.closeups)
     except ModelNotAvailable as exc:
         log.error("%s", exc)
         return 1

@@ -44,6 +44,22 @@ def detector_metrics(detector: GaugeDetector, root: Path) -> dict:
     return {"frames": len(ious), "mean_box_iou": float(ious_arr.mean()), "recall_iou50": float((ious_arr >= 0.5).mean())}
 
 
+def closeup_metrics(detector: GaugeDetector, folder: Path) -> dict:
+    """Detection on rendered close-ups (``gauged synth images --kind crop``: one gauge filling most of
+    each image, ``labels.jsonl``): IoU of the best box with the gauge's box (front and case, clipped),
+    the convention of the real substation labels."""
+    import json
+
+    ious = []
+    for line in (folder / "labels.jsonl").read_text().splitlines():
+        record = json.loads(line)
+        found = detector.detect(cv2.imread(str(folder / record["image"]), cv2.IMREAD_COLOR))
+        boxes = [] if isinstance(found, StageFailure) else [d.box for d in found]
+        ious.append(best_iou(record["gauges"][0]["box"], boxes))
+    ious_arr = np.asarray(ious)
+    return {"images": len(ious), "mean_box_iou": float(ious_arr.mean()), "recall_iou50": float((ious_arr >= 0.5).mean())}
+
+
 def needle_metrics(crop: OnnxModel, root: Path) -> dict:
     from gauged.training.real_data import load_needle_split
 
@@ -86,7 +102,8 @@ def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000) -> dict:
             "unassigned_share": (predicted - matched) / max(1, predicted), "start_end_found": ends_found / max(1, ends)}
 
 
-def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Path | None = None) -> dict:
+def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Path | None = None,
+                    closeups: Path | None = None) -> dict:
     crop = OnnxModel(model_path(CROP_MODEL, models_dir), threads)
     try:
         detector_model: OnnxModel | None = OnnxModel(model_path(DETECTOR_MODEL, models_dir), threads)
@@ -102,6 +119,8 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
         result["speed_ms"]["detector_1280x720"] = median_ms(lambda: detector.detect(frame))
         if (data / "substation-dials").is_dir():
             result["detector"] = detector_metrics(detector, data / "substation-dials")
+        if closeups is not None:
+            result["closeups"] = closeup_metrics(detector, closeups)
     else:
         result["detector"] = "missing: gauged/models/detector.onnx is not trained yet"
     if (data / "needle-polygons").is_dir():
@@ -122,6 +141,10 @@ def format_models(result: dict) -> str:
         d = result["detector"]
         lines.append(f"detector on {d['frames']} substation frames: mean box IoU {d['mean_box_iou']:.3f}, "
                      f"recall@0.5 {d['recall_iou50']:.1%}")
+    if "closeups" in result:
+        c = result["closeups"]
+        lines.append(f"detector on {c['images']} rendered close-ups: mean box IoU {c['mean_box_iou']:.3f}, "
+                     f"recall@0.5 {c['recall_iou50']:.1%}")
     if "needle" in result:
         n = result["needle"]
         lines.append(f"needle on {n['photos']} real photos: mean mask IoU {n['mean_mask_iou']:.3f}, direction within "

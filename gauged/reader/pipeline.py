@@ -32,7 +32,7 @@ DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much mo
 NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
-PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo the detector found nothing in, read again
+PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a close-up), read again
 
 
 def _area(box: Box) -> float:
@@ -128,9 +128,10 @@ class GaugeReader:
 
         Without a detector the whole image is read as one gauge (a photo cropped to the dial); so is
         a close-up, where a detection covers :data:`CLOSE_UP` of the image or more, and an image
-        where the detector finds nothing (read again with a :data:`PHOTO_MARGIN` around it when its notches
-        make no scale ring; that read's failure is returned once it got as far as a scale arc, i.e. there is
-        a dial; before that, the detector's failure). So is an image where no
+        where the detector finds nothing (both read again with a :data:`PHOTO_MARGIN` around them when
+        their notches make no scale ring, :meth:`_read_photo`; with no detection, that read's failure is
+        returned once it got as far as a scale arc, i.e. there is a dial; before that, the detector's
+        failure). So is an image where no
         detection holds a scale ring: the detector sometimes boxes a number or the hub of a dial that
         fills the photo. The photo read whole is kept when it gets further than every detection; in a
         scene of several dials it seldom gets past the ellipse, and then changes nothing. A dial found
@@ -147,24 +148,31 @@ class GaugeReader:
         if isinstance(detections, StageFailure):
             # No dial found in the photo as a scene: it may be a close-up of one; the later stages
             # refuse honestly when it is not a dial at all (the detection failure is then reported).
-            read = self.read_box(image, whole, 0.0, known, primary_unit)
-            if read.failure is not None and read.failure.stage == "ellipse":
-                # Notches but no ring: a dial that fills the photo runs past its edges, where the crop
-                # model finds too few of its notches; the photo is read once more with a margin around it.
-                m = PHOTO_MARGIN
-                wider = self.read_box(image, (-m * width, -m * height, (1 + m) * width, (1 + m) * height), 0.0,
-                                      known, primary_unit)
-                read = wider if _progress(wider) > _progress(read) else read
+            read = self._read_photo(image, 0.0, known, primary_unit)
             return [read] if read.failure is None or read.arc is not None else detections
         if any(_area(d.box) >= CLOSE_UP * width * height for d in detections):
-            # A close-up photo of one dial (the detector learnt dials in scenes): the photo is the gauge.
-            return [self.read_box(image, whole, max(d.score for d in detections), known, primary_unit)]
+            # A close-up photo of one dial: the photo is the gauge.
+            return [self._read_photo(image, max(d.score for d in detections), known, primary_unit)]
         reads = [self._read_detection(image, d.box, d.score, known, primary_unit) for d in detections]
         if all(read.failure is not None and read.arc is None for read in reads):
             photo = self.read_box(image, whole, max(read.score for read in reads), known, primary_unit)
             if _progress(photo) > max(_progress(read) for read in reads):
                 return [photo]
         return reads
+
+    def _read_photo(self, image: np.ndarray, score: float, known: KnownScale | None,
+                    primary_unit: str | None) -> GaugeRead:
+        """Read the whole photo as one gauge; when its notches make no scale ring (a dial that fills
+        the photo runs past its edges, where the crop model finds too few of its notches), read it once
+        more with a :data:`PHOTO_MARGIN` around it and keep the read that got further."""
+        height, width = image.shape[:2]
+        read = self.read_box(image, (0.0, 0.0, float(width), float(height)), score, known, primary_unit)
+        if read.failure is not None and read.failure.stage == "ellipse":
+            m = PHOTO_MARGIN
+            wider = self.read_box(image, (-m * width, -m * height, (1 + m) * width, (1 + m) * height), score,
+                                  known, primary_unit)
+            read = wider if _progress(wider) > _progress(read) else read
+        return read
 
     def _read_detection(self, image: np.ndarray, box: Box, score: float, known: KnownScale | None,
                         primary_unit: str | None) -> GaugeRead:
