@@ -73,7 +73,8 @@ def fit_full_circle(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | N
     turn = steps * step
     slope = turn / (2 * math.pi)
     intercept = float(np.mean(value[best] - slope * along))
-    if not (steps - 2) * step - TURN_TOLERANCE * step <= kept[-1] - kept[0] < turn - 0.5 * step:
+    # 0..9 span 9 steps of a 10-step turn; the one at the seam and one more unread leave 7.
+    if not (steps - 3) * step - TURN_TOLERANCE * step <= kept[-1] - kept[0] < turn - 0.5 * step:
         return None
     low = math.floor(kept[0] / turn + 1e-9) * turn  # 0 on a 0..10 dial whose "0" went unread
     residual = value[best] - (slope * along + intercept)

@@ -305,9 +305,9 @@ class ScaleTextReader:
         """Scale numbers (markers with boxes in ``crop`` pixels) and the unit of the crop's dial.
 
         ``arc`` is the fitted scale (ellipse, centre, gap), ``hints`` (N, 2) crop px the crop
-        model's number centres (may be empty). With ``progression`` the markers are limited to up to
-        two arithmetic progressions (:func:`gauged.reader.numbers.filter_progression`, one per
-        concentric scale) when one is found; otherwise all parsed numbers are returned for the
+        model's number centres (may be empty). With ``progression`` and ends found (not inferred), the
+        markers are limited to up to two arithmetic progressions (:func:`gauged.reader.numbers.filter_progression`,
+        one per concentric scale) when one is found; otherwise all parsed numbers are returned for the
         scale stage's RANSAC. ``detail``, when given, is the same square region as ``crop`` at a higher
         resolution (any size): the rectified view is sampled from it. Failures: ``no_text``,
         ``no_numbers``.
@@ -327,7 +327,10 @@ class ScaleTextReader:
         if not markers:
             return StageFailure(STAGE, "no_numbers", f"{len(texts)} text(s) read, none a scale number: "
                                 + ", ".join(repr(t.text) for t in texts[:6]))
-        if self.progression:
+        # Ends inferred from a notch gap may lie inside a full-circle scale, whose numbers then run on
+        # across the gap: unwrapped from it they look off the progression (a real dial indicator lost
+        # its 8 and 9), so all of them go on to the scale stage, which tries a full circle.
+        if self.progression and not arc.ends_inferred:
             kept = keep_progressions(markers, circle, view.gap)
             # Decimal numbers left out stay on as outliers: on a scale whose other numbers lost their
             # decimal points they are the evidence (gauged.reader.scale, dropped_decimal_point).

@@ -50,6 +50,10 @@ def test_numbers_one_to_nine_round_the_dial_make_a_zero_to_ten_full_circle():
         assert scale.value_at(wrap_to_pi(TOP + math.radians(36.0 * value))) == pytest.approx(value, abs=0.05)
     # a needle a hair before the zero reads a small negative value, not nearly 10
     assert scale.value_at(TOP - math.radians(1.0)) == pytest.approx(-1 / 36, abs=0.05)
+    # the number at the seam and one more unread (a real dial indicator's "0" under the needle, "1")
+    two_short = fit_full_circle(_arc(), _numbers(range(2, 10)), "mm")
+    assert two_short is not None and (two_short.min_value, two_short.max_value) == (0.0, pytest.approx(10.0))
+    assert fit_full_circle(_arc(), _numbers(range(3, 10)), "mm") is None  # three unread: too little of the turn
 
 
 def test_a_sector_scale_or_found_ends_are_not_a_full_circle():

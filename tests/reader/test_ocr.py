@@ -179,6 +179,24 @@ def test_read_markers_reads_upright_text_of_a_dial_whose_gap_is_not_at_the_botto
     assert isinstance(read, StageFailure) or right(read) < 3
 
 
+def test_read_markers_keeps_numbers_beyond_an_inferred_gap(reader):
+    """Ends inferred from a notch gap may cut a full-circle dial's numbers in two (a real dial
+    indicator: 8 and 9 fell beyond the gap and were dropped as off the progression). With inferred
+    ends every number read goes on to the scale stage; with found ends the progression filter runs."""
+    values = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]
+    img, centres = render_dial(values, unit="")
+    e = Ellipse(*CIRCLE[:2], CIRCLE[2], CIRCLE[2], 0.0)
+    start, end = math.radians(-60.0), math.radians(-120.0)  # a gap at the top, between 4 and 5
+    read = {}
+    for inferred in (True, False):
+        arc = ScaleArc(e, e.center, start, end, wrap_angle(start, end), np.zeros((0, 2)), 0.0, inferred)
+        markers = reader.read_markers(img, arc, centres)
+        assert not isinstance(markers, StageFailure), markers
+        read[inferred] = {m.value for m in markers[0]}
+    assert len(read[True]) >= 8 and read[True] & {0, 1, 2, 3, 4} and read[True] & {5, 6, 7, 8, 9}  # both sides
+    assert len(read[False]) < len(read[True])
+
+
 def test_read_markers_no_text_on_a_blank_dial(reader):
     blank = np.full((448, 448, 3), 200, np.uint8)
     e = Ellipse(224, 224, 180, 180, 0)
