@@ -32,14 +32,22 @@ class NeedleReading:
     offset: float  # distance of the line from the dial centre, in radii
 
 
+MIN_PIXELS = 6  # mask cells a needle line needs; a smaller component is a speck, not the needle
+
+
 def needle_pixels(needle_prob: np.ndarray, stride: int, centre: tuple[float, float], threshold: float = 0.5
                   ) -> tuple[np.ndarray, np.ndarray]:
-    """Cell centres (N, 2) in crop pixels and probabilities (N,) of the mask component nearest ``centre``."""
+    """Cell centres (N, 2) in crop pixels and probabilities (N,) of the mask component nearest ``centre``
+    among those of at least :data:`MIN_PIXELS` cells (any, when none is that large): a one-cell speck
+    of the counterweight beside the hub of a real oil gauge was taken for its needle."""
     mask = (needle_prob >= threshold).astype(np.uint8)
     count, labels = cv2.connectedComponents(mask, connectivity=8)
     if count <= 1:
         return np.zeros((0, 2)), np.zeros(0)
-    ys, xs = np.nonzero(labels)
+    sizes = np.bincount(labels.ravel(), minlength=count)
+    large = sizes >= MIN_PIXELS
+    large[0] = False  # the background
+    ys, xs = np.nonzero(np.isin(labels, np.flatnonzero(large)) if large.any() else labels)
     points = np.stack([stride * (xs + 0.5), stride * (ys + 0.5)], axis=1)
     distances = np.hypot(points[:, 0] - centre[0], points[:, 1] - centre[1])
     label = labels[ys[np.argmin(distances)], xs[np.argmin(distances)]]
@@ -59,7 +67,7 @@ def fit_needle(needle_prob: np.ndarray, stride: int, arc: ScaleArc, threshold: f
     points, probs = needle_pixels(needle_prob, stride, arc.centre, threshold)
     if len(points) == 0:
         return StageFailure(STAGE, "no_needle", f"no needle pixel above {threshold:g}")
-    line = fit_needle_line(points, arc.centre, weights=probs, min_pixels=6)
+    line = fit_needle_line(points, arc.centre, weights=probs, min_pixels=MIN_PIXELS)
     if isinstance(line, StageFailure):
         return line
     direction = np.asarray(line.direction)

@@ -43,6 +43,19 @@ def test_detector_finds_the_gauges_of_clean_scenes():
     assert found >= 0.75 * labelled, f"{found} of {labelled} gauges found at IoU 0.5"
 
 
+def test_detector_boxes_a_gauge_that_fills_the_frame():
+    """Close-ups (one gauge filling most of the image, as in photos taken to read a dial): the
+    detector boxes the gauge whole, front and case, as the real substation labels do."""
+    detector = GaugeDetector(_model(DETECTOR_MODEL))
+    ious = []
+    for seed in SEEDS:
+        crop = render_crop(seed, 448, masks=False)
+        detections = detector.detect(crop.image)
+        boxes = [] if isinstance(detections, StageFailure) else [d.box for d in detections]
+        ious.append(max((box_iou(crop.truth["box"], b) for b in boxes), default=0.0))
+    assert min(ious) >= 0.5 and np.mean(ious) >= 0.75, ious
+
+
 def test_crop_model_finds_notches_ends_and_needle_of_clean_crops():
     crop = _model(CROP_MODEL)
     size = crop.input_size
