@@ -21,16 +21,16 @@ import numpy as np
 
 from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
-from gauged.geometry.scale_fit import RING_GAP, fit_scale_model, marker_centres, number_rings
+from gauged.geometry.scale_fit import RING_GAP, fit_angle_value, fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.full_circle import fit_full_circle
-from gauged.reader.numbers import read_as_digits
+from gauged.reader.numbers import nice_step, read_as_digits
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
 REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered",
            "dropped_decimal_point", "irregular_numbers", "numbers_off_grid",
-           "secondary_scale_only")
+           "secondary_scale_only", "ambiguous_numbers")
 INNER_RING = 0.8  # ring radii: read numbers inside this may be an inner scale if printed numbers lie further out
 SECONDARY_RADIUS = 0.62  # ring radii; main-scale numbers on 300 synthetic renders sit at >= 0.69 (1st pct)
 GRID_MIN_HINTS = 5  # confident number centres needed for the grid check
@@ -184,11 +184,40 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
     digits = sum(1 for m in model.markers if m.inlier and read_as_digits(m.text))
     if digits < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers read as digits, need {min_inliers}")
-    for check in (_irregular, _uncovered, _dropped_decimal_point):
+    for check in (_irregular, _uncovered, _dropped_decimal_point, _rival):
         failure = check(model)
         if failure is not None:
             return failure
     return model
+
+
+def _rival(model: ScaleModel) -> StageFailure | None:
+    """A failure when the numbers the fit left out make another line as well supported as its own.
+
+    Two lines with as many agreeing numbers each (sharing at most one, a "0" both start from) mean the
+    evidence does not say which scale the dial has: "0, 10, 15, 25" (trailing zeros unread) beside
+    "0, 50, 200, 300" on a 0..300 dial gave 22.6 for 224.6 (held-out 000831).
+    """
+    inliers = [m for m in model.markers if m.inlier and m.angle is not None]
+    outliers = [m for m in model.markers if not m.inlier and m.angle is not None]
+    if len(outliers) < len(inliers) - 1 or len(inliers) < 2:
+        return None
+    zero = model.zero_angle
+    for shared in [None, *inliers]:
+        group = outliers + ([shared] if shared is not None else [])
+        if len(group) < len(inliers):
+            continue
+        fit = fit_angle_value(np.array([unwrap(m.angle, zero) for m in group], float), np.array([m.value for m in group], float),
+                              min_inliers=len(inliers), expected_sign=1)
+        if isinstance(fit, StageFailure):
+            continue
+        rival = np.unique([m.value for m, ok in zip(group, fit.inliers, strict=True) if ok])
+        # Misreads scattered at random seldom step evenly, and less often by a round step.
+        if len(rival) >= max(3, len(inliers)) and _regular(rival) and nice_step(float(np.diff(rival).min())):
+            return StageFailure(STAGE, "ambiguous_numbers",
+                                "numbers " + ", ".join(f"{m.value:g}" for m in inliers) + " and "
+                                + ", ".join(f"{v:g}" for v in rival) + " make two lines as well supported")
+    return None
 
 
 def _irregular(model: ScaleModel) -> StageFailure | None:
@@ -199,14 +228,20 @@ def _irregular(model: ScaleModel) -> StageFailure | None:
     ("50" read "10") breaks that, and the line it bent is not the scale's.
     """
     values = np.unique([m.value for m in model.markers if m.inlier])
-    if len(values) < 3:
-        return None
-    diffs = np.diff(values)
-    multiples = diffs / diffs.min()
-    if np.abs(multiples - np.round(multiples)).max() > STEP_TOLERANCE:
+    if not _regular(values):
         return StageFailure(STAGE, "irregular_numbers",
                             "agreeing numbers " + ", ".join(f"{v:g}" for v in values) + " are not steps of one progression")
     return None
+
+
+def _regular(values: np.ndarray) -> bool:
+    """Are the sorted distinct ``values`` steps of one progression (every difference a whole multiple
+    of the smallest)? Fewer than three always are."""
+    if len(values) < 3:
+        return True
+    diffs = np.diff(values)
+    multiples = diffs / diffs.min()
+    return bool(np.abs(multiples - np.round(multiples)).max() <= STEP_TOLERANCE)
 
 
 def _uncovered(model: ScaleModel) -> StageFailure | None:

@@ -223,6 +223,23 @@ def test_reading_low_confidence_on_scattered_numbers_and_a_weak_needle():
     assert isinstance(read_value(fit_needle(needle_prob(dial), STRIDE, arc), arc, scales[0]), Value)
 
 
+def test_ambiguous_numbers_when_the_left_out_numbers_make_as_good_a_line():
+    """A 0..300 dial numbered every 50 read "0, 10, 15, 25" (the trailing zeros of 100, 150, 250
+    unread) and "50, 200, 300": with the "0" both lines hold four numbers
+    stepping by a round value, so which scale it is cannot be told (held-out 000831 answered 22.6 for
+    224.6). Random misreads beside three right numbers are not such a rival."""
+    dial = Dial(majors=7)
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    printed = {0: 0, 1: 50, 2: 10, 3: 15, 4: 200, 5: 25, 6: 300}  # position k holds 50 k, read so
+    markers = [_marker(dial, dial.start_deg + k * step, v) for k, v in printed.items()]
+    failure = assert_failure(fit_scales(arc, markers), "scale", "ambiguous_numbers")
+    assert "0, 50, 200, 300" in failure.detail
+    right = [_marker(dial, dial.start_deg + k * step, 50 * k) for k in range(7)]
+    scales = fit_scales(arc, right[:4] + markers[5:6])  # 0, 50, 100, 150 and a misread 25: one line
+    assert not isinstance(scales, StageFailure) and scales[0].max_value == pytest.approx(300.0, abs=0.5)
+
+
 def test_scale_not_covered_when_consistent_numbers_leave_an_end_far_away():
     """Three agreeing numbers bunched at the start (2, 3, 4 of a 0..10 dial): extrapolating to the far
     end would be a guess, so the scale is refused; missing only the end numbers is fine."""
