@@ -45,9 +45,10 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--scene", action="store_true", help="1280x720 frames with one gauge instead of crops")
+    parser.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx instead of the shipped ones")
     args = parser.parse_args()
     header("cold read of one gauge (detect + all stages), models loaded")
-    reader = build_reader(ReaderConfig(threads=args.threads))
+    reader = build_reader(ReaderConfig(threads=args.threads, models_dir=args.models))
     print(f"# detector: {'yes' if reader.detector else 'no (image read as one gauge)'}, "
           f"OCR: {'yes' if reader.ocr else 'no'}, threads {args.threads}, load {os.getloadavg()[0]:.2f}")
     batch = images(args.images, args.scene)
