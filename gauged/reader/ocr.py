@@ -10,6 +10,9 @@ more than the paper's one pass did (it failed on 40-57% of images):
 - **orientation**: a text whose first reading does not parse is read again turned by 180 and +-90
   degrees (radially printed numbers), in the order the circle makes likely; extra rotations run only
   when the first attempt fails;
+- **the image's way up**: a dial whose gap is not at the bottom but whose text is printed upright
+  stands on its head in the gap-down view; when that view reads too few numbers, the dial is read
+  again with the image's down at the bottom;
 - **quick pass**: first only the ink at each predicted number centre of the crop model is recognised,
   in one batch, with no text detection; when that gives :data:`QUICK_ENOUGH` numbers of one
   arithmetic progression, only the face inside the scale is searched for the unit and the full pass
