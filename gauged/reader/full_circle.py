@@ -17,11 +17,11 @@ from dataclasses import replace
 import numpy as np
 
 from gauged.geometry.angles import wrap_to_pi
+from gauged.geometry.scale_fit import DEFAULT_ANGLE_TOL as ANGLE_TOL
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.numbers import read_as_digits
 from gauged.types import ScaleMarker, ScaleModel
 
-ANGLE_TOL = math.radians(3.0)  # as the scale fit's (gauged.geometry.scale_fit.DEFAULT_ANGLE_TOL)
 MIN_NUMBERS = 6  # agreeing numbers read as digits a full-circle scale needs
 MIN_STEPS = 6  # steps per turn: fewer is a sector scale whose gap went unseen, not a full circle
 TURN_TOLERANCE = 0.03  # of a step: how far a turn may be from a whole number of steps

@@ -317,11 +317,12 @@ class ScaleTextReader:
         """
         view = self._read_view(crop, arc, hints, detail, arc.zero_angle)
         upright = _image_down(arc)
-        agreeing = view.agreeing()
-        if agreeing < UPRIGHT_BELOW and abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN:
-            other = self._read_view(crop, arc, hints, detail, upright)
-            if other.agreeing() > agreeing:
-                view = other
+        if abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN:  # the cheap test first
+            agreeing = view.agreeing()
+            if agreeing < UPRIGHT_BELOW:
+                other = self._read_view(crop, arc, hints, detail, upright)
+                if other.agreeing() > agreeing:
+                    view = other
         texts, circle, matrix = view.texts, view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, "no_text", "no text found on the rectified dial")

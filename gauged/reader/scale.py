@@ -205,8 +205,6 @@ def _rival(model: ScaleModel) -> StageFailure | None:
     zero = model.zero_angle
     for shared in [None, *inliers]:
         group = outliers + ([shared] if shared is not None else [])
-        if len(group) < len(inliers):
-            continue
         fit = fit_angle_value(np.array([unwrap(m.angle, zero) for m in group], float), np.array([m.value for m in group], float),
                               min_inliers=len(inliers), expected_sign=1)
         if isinstance(fit, StageFailure):

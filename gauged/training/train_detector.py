@@ -126,8 +126,8 @@ def main(argv: list[str] | None = None) -> int:
             real_train, real_val = load(dials), load(dials)
         else:
             real_train, real_val = load(fold(dials, args.real_fold)), load(fold(dials, "B" if args.real_fold == "A" else "A"))
-    from_onnx = args.init is not None and args.init.suffix == ".onnx"
-    model = DetNet(args.size, pretrained=not (args.scratch or from_onnx)).to(memory_format=torch.channels_last)
+    # Any --init sets every weight, so the ImageNet ones are not loaded first.
+    model = DetNet(args.size, pretrained=not (args.scratch or args.init)).to(memory_format=torch.channels_last)
     if args.init:
         from gauged.training.from_onnx import initialise
 
