@@ -46,11 +46,13 @@ def main() -> int:
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--scene", action="store_true", help="1280x720 frames with one gauge instead of crops")
     parser.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx instead of the shipped ones")
+    parser.add_argument("--ocr-float", action="store_true",
+                        help="run the OCR wheel's float text detector instead of the shipped int8 copy")
     args = parser.parse_args()
     header("cold read of one gauge (detect + all stages), models loaded")
-    reader = build_reader(ReaderConfig(threads=args.threads, models_dir=args.models))
+    reader = build_reader(ReaderConfig(threads=args.threads, models_dir=args.models, ocr_int8_detector=not args.ocr_float))
     print(f"# detector: {'yes' if reader.detector else 'no (image read as one gauge)'}, "
-          f"OCR: {'yes' if reader.ocr else 'no'}, threads {args.threads}, load {os.getloadavg()[0]:.2f}")
+          f"OCR: {reader.ocr.engine.model_files[0].name if reader.ocr else 'no'}, threads {args.threads}, load {os.getloadavg()[0]:.2f}")
     batch = images(args.images, args.scene)
     for image in batch[:3]:  # warm-up: first onnxruntime runs allocate
         reader.read_image(image)

