@@ -86,6 +86,10 @@ class CropNet(nn.Module):
     Channels are :data:`CROP_CHANNELS`: six keypoint heatmaps (start notch, end notch, major notches,
     needle tip, needle pivot, scale-number centres; as in Reitsma et al., Sec. 3.2) and the needle mask.
     Output stride 2 keeps thin needles several cells wide and notch peaks sub-pixel accurate.
+
+    With :meth:`add_needle_branch` the needle mask gets a decoder of its own from stride 8 down (a
+    copy of the shared one, then trained alone): the keypoint maps stay exactly what they were, and
+    the needle can be fitted to the real annotators' masks without moving a notch.
     """
 
     def __init__(self, image_size: int = 256, pretrained: bool = True, width: int = 48):
@@ -99,13 +103,49 @@ class CropNet(nn.Module):
         nn.init.constant_(self.head[-1].bias, -4.0)
         self.register_buffer("mean", torch.tensor([0.498, 0.498, 0.498]).view(1, 3, 1, 1))
         self.register_buffer("std", torch.tensor([0.502, 0.502, 0.502]).view(1, 3, 1, 1))
+        self.needle_branch: NeedleBranch | None = None
+
+    def add_needle_branch(self) -> None:
+        """Give the needle its own decoder, a copy of the shared one's up4/up2/head, and freeze the
+        rest of the net (its BatchNorms stay in eval mode when training)."""
+        self.needle_branch = NeedleBranch(self.up4, self.up2, self.head)
+        for name, parameter in self.named_parameters():
+            parameter.requires_grad = name.startswith("needle_branch.")
+
+    def train(self, mode: bool = True) -> CropNet:
+        super().train(mode)
+        if self.needle_branch is not None and mode:  # the frozen trunk keeps its statistics
+            for child in (self.encoder, self.up8, self.up4, self.up2, self.head):
+                child.eval()
+        return self
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         f = self.encoder((x - self.mean) / self.std)
-        y = self.up8(f[16], f[8])
-        y = self.up4(y, f[4])
-        y = self.up2(y, f[2])
-        return self.head(y)
+        y8 = self.up8(f[16], f[8])
+        out = self.head(self.up2(self.up4(y8, f[4]), f[2]))
+        if self.needle_branch is None:
+            return out
+        return torch.cat([out[:, :-1], self.needle_branch(y8, f)], dim=1)
+
+
+class NeedleBranch(nn.Module):
+    """The needle mask's own decoder from the shared stride-8 features: up4, up2 and a one-channel
+    head, initialised as copies of the shared decoder (its needle output row)."""
+
+    def __init__(self, up4: _UpBlock, up2: _UpBlock, head: nn.Sequential):
+        super().__init__()
+        import copy
+
+        self.up4, self.up2 = copy.deepcopy(up4), copy.deepcopy(up2)
+        last = head[-1]
+        out = nn.Conv2d(last.in_channels, 1, 1)
+        with torch.no_grad():
+            out.weight.copy_(last.weight[-1:])
+            out.bias.copy_(last.bias[-1:])
+        self.head = nn.Sequential(copy.deepcopy(head[0]), out)
+
+    def forward(self, y8: torch.Tensor, f: dict[int, torch.Tensor]) -> torch.Tensor:
+        return self.head(self.up2(self.up4(y8, f[4]), f[2]))
 
 
 class DetNet(nn.Module):

@@ -174,6 +174,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--init", type=Path, help="start from this checkpoint's weights (fine-tuning; any input size), or from a shipped ONNX export of the same architecture (e.g. gauged/models/crop.onnx)")
     parser.add_argument("--needle-dilate-px", type=int, default=0,
                         help="widen synthetic needle masks by this many pixels per side (1 matches the real annotators' polygons)")
+    parser.add_argument("--needle-branch", action="store_true",
+                        help="after --init, give the needle mask its own decoder and train only that "
+                             "(the keypoint maps stay exactly as they were)")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
@@ -191,6 +194,11 @@ def main(argv: list[str] | None = None) -> int:
 
         log.info(initialise(model, args.init, lambda: torch.from_numpy(np.stack(
             [augmented(shards[0].sample(i), args.size, None, 0.0)[0] for i in range(min(48, len(shards[0])))]))))
+    if args.needle_branch:
+        model.add_needle_branch()
+        model.to(memory_format=torch.channels_last)
+        log.info("needle branch: %d trainable parameters, the rest frozen",
+                 sum(p.numel() for p in model.parameters() if p.requires_grad))
     log.info("crop model: %d parameters, %s init; %s training samples", count_parameters(model),
              args.init or ("scratch" if args.scratch else "ImageNet"), [len(s) for s in shards])
     steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch
@@ -205,7 +213,8 @@ def main(argv: list[str] | None = None) -> int:
         export_onnx(model, args.size, args.export, {"kind": "crop", "size": args.size, "stride": 2,
                                                     "channels": list(CROP_CHANNELS), "metrics": best,
                                                     "init": str(args.init) if args.init else ("scratch" if args.scratch else "imagenet"),
-                                                    "needle_dilate_px": args.needle_dilate_px})
+                                                    "needle_dilate_px": args.needle_dilate_px,
+                                                    "needle_branch": args.needle_branch})
         log.info("exported %s", args.export)
     return 0
 

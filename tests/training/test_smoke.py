@@ -104,3 +104,28 @@ def test_detector_batches_mix_scene_and_close_up_shards(tmp_path):
     (x, maps, weight), = list(make_batches(shards, [], SIZE, 4, 0, 0)(0))
     assert x.shape == (4, 3, SIZE, SIZE) and maps.shape == (4, 5, SIZE // 8, SIZE // 8)
     assert float(weight.sum()) >= 2  # at least the two close-ups' centres
+
+
+def test_needle_branch_starts_as_the_shared_decoder_and_trains_only_the_needle():
+    torch.manual_seed(0)
+    model = CropNet(SIZE, pretrained=False, width=16).eval()
+    x = torch.rand(2, 3, SIZE, SIZE)
+    with torch.no_grad():
+        before = model(x)
+    model.add_needle_branch()
+    with torch.no_grad():
+        assert torch.allclose(model(x), before, atol=1e-6)  # a copy: the same function at first
+    trainable = {name.split(".")[0] for name, p in model.named_parameters() if p.requires_grad}
+    assert trainable == {"needle_branch"}
+    optimizer = torch.optim.AdamW([p for p in model.parameters() if p.requires_grad], lr=1e-2)
+    model.train()
+    assert not model.encoder.training and model.needle_branch.training  # frozen BatchNorms keep their statistics
+    for _ in range(3):
+        optimizer.zero_grad()
+        model(x)[:, -1].sigmoid().mean().backward()
+        optimizer.step()
+    model.eval()
+    with torch.no_grad():
+        after = model(x)
+    assert torch.equal(after[:, :-1], before[:, :-1])  # keypoint maps untouched
+    assert (after[:, -1] - before[:, -1]).abs().mean() > 1e-3  # the needle's branch learnt
