@@ -107,15 +107,13 @@ class ScaleTextReader:
     used (:data:`gauged.reader.ocr_engine.MODEL_SETS`), ``min_score`` the recogniser score under
     which a reading is tried in other orientations and, if still under, dropped. ``det_side`` is the
     detector's input side in pixels for the ring around the circle. ``int8_detector`` is the int8
-    copy of the text detector to run instead of the float one; with ``upright`` lines the direction
-    classifier finds upside down are read turned (:class:`OcrEngine`).
+    copy of the text detector to run instead of the float one (:class:`OcrEngine`).
     """
 
     def __init__(self, threads: int = 2, models: str = DEFAULT_MODEL_PACKAGE, min_score: float = 0.5,
                  det_side: int = 384, use_hints: bool = True, progression: bool = True,
-                 polar_fallback: bool = True, quick: bool = True, int8_detector: Path | None = None,
-                 upright: bool = True) -> None:
-        self.engine = OcrEngine(threads=threads, package=models, int8_detector=int8_detector, upright=upright)
+                 polar_fallback: bool = True, quick: bool = True, int8_detector: Path | None = None) -> None:
+        self.engine = OcrEngine(threads=threads, package=models, int8_detector=int8_detector)
         self.min_score = min_score
         self.det_side = det_side
         self.use_hints = use_hints
@@ -157,8 +155,7 @@ class ScaleTextReader:
         first = self.engine.recognize([crop_quad(image, q) for q in quads])
         out = []
         for quad, rec in zip(quads, first, strict=True):
-            quad = _turned(quad, 2) if rec.turned else np.asarray(quad, np.float32)  # quad[0]: the text's top-left
-            best = TextBox(rec.text, rec.score, quad, rec.digits, rec.digits_score)
+            best = TextBox(rec.text, rec.score, np.asarray(quad, np.float32), rec.digits, rec.digits_score)
             if not _accepts(best, self.min_score) and _maybe_turned(best):
                 best = self._reorient(image, best, circle)
             if best.text and best.score >= self.min_score:

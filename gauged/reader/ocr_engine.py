@@ -48,14 +48,6 @@ TEXT_CHARS = frozenset(
 )
 NUMBER_CHARS = frozenset("0123456789.,-−")
 
-# The text-direction classifier (0 or 180 degrees) each wheel ships beside its detector and recogniser.
-CLASSIFIERS: dict[str, str] = {
-    "rapidocr": "models/ch_ppocr_mobile_v2.0_cls_mobile.onnx",
-    "rapidocr_onnxruntime": "models/ch_ppocr_mobile_v2.0_cls_infer.onnx",
-}
-CLS_HEIGHT, CLS_WIDTH = 48, 192  # the classifier's input (PaddleOCR's cls_image_shape)
-CLS_TURNED = 0.9  # PaddleOCR's cls_thresh: a line is read turned by 180 degrees above this probability
-
 REC_HEIGHT = 48
 REC_MIN_WIDTH = 128  # PaddleOCR pads to 48 x 320; 128 reads as well on gauge text and is 2-3x faster
 REC_BATCH = 8
@@ -87,7 +79,6 @@ class Recognition:
     score: float
     digits: str
     digits_score: float
-    turned: bool = False  # the line was read turned by 180 degrees (the classifier found it upside down)
 
 
 @dataclass(frozen=True, slots=True)
@@ -161,15 +152,6 @@ def _session(path: Path, threads: int):
     return ort.InferenceSession(str(path), sess_options=session_options(threads), providers=["CPUExecutionProvider"])
 
 
-def _classifier_file(model_file: Path) -> Path | None:
-    """The direction classifier shipped in the same wheel as ``model_file`` (None when absent)."""
-    root = model_file.parent.parent
-    for name in CLASSIFIERS.values():
-        if (root / name).is_file():
-            return root / name
-    return None
-
-
 def _int8_session(int8_path: Path, float_path: Path, threads: int):
     """A session of the int8 detector when ``int8_path`` was made from ``float_path``; else None,
     with a warning naming the reason (the caller runs the float detector)."""
@@ -195,14 +177,13 @@ class OcrEngine:
     across threads that change ``threads``; one engine per worker is the intended use).
 
     ``threads`` is onnxruntime's intra-op thread count. ``package`` picks the model set
-    (:data:`MODEL_SETS`). With ``upright`` (and the wheel's text-direction classifier installed),
-    each line the classifier finds upside down is read turned by 180 degrees. ``int8_detector`` is an int8 copy of the wheel's text detector
+    (:data:`MODEL_SETS`). ``int8_detector`` is an int8 copy of the wheel's text detector
     (``gauged.training.quantize_ocr``); it replaces the float detector when it was made from that
     very file (the SHA-256 in its metadata), else the float one runs and a warning says why.
     """
 
     def __init__(self, threads: int = 2, package: str = DEFAULT_MODEL_PACKAGE,
-                 int8_detector: Path | None = None, upright: bool = True) -> None:
+                 int8_detector: Path | None = None) -> None:
         if threads < 1:
             raise ValueError("threads must be >= 1")
         det_path, rec_path = find_model_files(package)
@@ -214,8 +195,6 @@ class OcrEngine:
         else:
             det_path = Path(int8_detector)
         self.model_files = (det_path, rec_path)
-        cls_path = _classifier_file(rec_path) if upright else None
-        self._cls = _session(cls_path, threads) if cls_path is not None else None
         self._rec = _session(rec_path, threads)
         meta = self._rec.get_modelmeta().custom_metadata_map
         if "character" not in meta:
@@ -247,23 +226,8 @@ class OcrEngine:
         return db_boxes(prob, (w / nw, h / nh), thresh, box_thresh, unclip_ratio)
 
     # -- recognition -------------------------------------------------------------------------
-    def upside_down(self, lines: Sequence[np.ndarray]) -> np.ndarray:
-        """(N,) bool: the classifier's 180-degree probability of each line is at least :data:`CLS_TURNED`
-        (all False without the classifier)."""
-        if self._cls is None or not lines:
-            return np.zeros(len(lines), bool)
-        batch = np.zeros((len(lines), 3, CLS_HEIGHT, CLS_WIDTH), np.float32)
-        for k, line in enumerate(lines):
-            width = min(CLS_WIDTH, max(1, math.ceil(CLS_HEIGHT * line.shape[1] / max(1, line.shape[0]))))
-            batch[k, :, :, :width] = _normalise(cv2.resize(line, (width, CLS_HEIGHT), interpolation=cv2.INTER_LINEAR))
-        probs = self._cls.run(None, {self._cls.get_inputs()[0].name: batch})[0]
-        return probs[:, 1] >= CLS_TURNED
-
     def recognize(self, lines: Sequence[np.ndarray]) -> list[Recognition]:
-        """Read each (h, w, 3) uint8 BGR line image (text left to right); a line the direction
-        classifier finds upside down is read turned by 180 degrees (``Recognition.turned``)."""
-        turned = self.upside_down(lines)
-        lines = [cv2.rotate(line, cv2.ROTATE_180) if flip else line for line, flip in zip(lines, turned)]
+        """Read each (h, w, 3) uint8 BGR line image (text left to right, upright)."""
         out: list[Recognition | None] = [None] * len(lines)
         order = sorted(range(len(lines)), key=lambda i: lines[i].shape[1] / max(1, lines[i].shape[0]))
         for start in range(0, len(order), REC_BATCH):
@@ -278,7 +242,7 @@ class OcrEngine:
             for k, i in enumerate(idx):
                 text, score = ctc_greedy(probs[k], self._text_idx, self._chars)
                 digits, dscore = ctc_greedy(probs[k], self._digit_idx, self._chars)
-                out[i] = Recognition(text.strip(), score, digits, dscore, bool(turned[i]))
+                out[i] = Recognition(text.strip(), score, digits, dscore)
         return [r for r in out if r is not None]
 
 

@@ -158,7 +158,7 @@ def test_read_markers_reads_rendered_dials_in_place(reader):
 def test_read_markers_reads_upright_text_of_a_dial_whose_gap_is_not_at_the_bottom(reader, monkeypatch):
     """Numbers printed upright on a face whose scale gap is at the top (synthetic dev 000111): turned
     gap-down, the numbers stand on their heads ("0.8" read "8", "1.6" read "9"); the view the image's
-    way up reads them, and so does the gap-down view once the direction classifier turns each line."""
+    way up reads them."""
     import gauged.reader.ocr as ocr
 
     values = [0, 0.4, 0.8, 1.2, 1.6]
@@ -174,10 +174,7 @@ def test_read_markers_reads_upright_text_of_a_dial_whose_gap_is_not_at_the_botto
             np.array([(m.box[0] + m.box[2]) / 2, (m.box[1] + m.box[3]) / 2]) - c) < 20 for v, c in zip(values, centres)))
 
     assert right(reader.read_markers(img, arc, centres)) >= 4
-    monkeypatch.setattr(ocr, "UPRIGHT_BELOW", 0)  # gap-down view only, as before session 6
-    if reader.engine._cls is not None:  # the direction classifier turns the numbers' lines upright
-        assert right(reader.read_markers(img, arc, centres)) >= 4
-    monkeypatch.setattr(reader.engine, "_cls", None)  # and without it, they stand on their heads
+    monkeypatch.setattr(ocr, "UPRIGHT_BELOW", 0)  # gap-down view only, as before
     read = reader.read_markers(img, arc, centres)
     assert isinstance(read, StageFailure) or right(read) < 3
 
@@ -233,23 +230,6 @@ def test_engine_loads_and_reads_without_network(monkeypatch):
     cv2.putText(line, "160", (30, 36), cv2.FONT_HERSHEY_SIMPLEX, 1.2, (20, 20, 20), 3, cv2.LINE_AA)
     rec = engine.recognize([line])[0]
     assert rec.text == "160" and rec.digits == "160" and rec.score > 0.9
-
-
-def test_engine_reads_an_upside_down_line_turned_upright():
-    try:
-        engine = OcrEngine(threads=1)
-    except OcrUnavailable as exc:
-        pytest.skip(f"OCR engine not installed ({exc}); {INSTALL}")
-    if engine._cls is None:
-        pytest.skip("the OCR wheel ships no text-direction classifier")
-    line = np.full((48, 160, 3), 235, np.uint8)
-    cv2.putText(line, "250", (30, 36), cv2.FONT_HERSHEY_SIMPLEX, 1.2, (20, 20, 20), 3, cv2.LINE_AA)
-    upside_down = cv2.rotate(line, cv2.ROTATE_180)
-    assert engine.upside_down([line, upside_down]).tolist() == [False, True]
-    upright, turned = engine.recognize([line, upside_down])
-    assert (upright.text, upright.turned) == ("250", False)
-    assert (turned.text, turned.turned) == ("250", True) and turned.score > 0.9
-    assert not OcrEngine(threads=1, upright=False).upside_down([upside_down]).any()
 
 
 def test_find_model_files_names_missing_and_unknown_packages(monkeypatch):
