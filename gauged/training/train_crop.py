@@ -175,10 +175,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--needle-dilate-px", type=int, default=0,
                         help="widen synthetic needle masks by this many pixels per side (1 matches the real annotators' polygons)")
     parser.add_argument("--needle-branch", action="store_true",
-                        help="after --init, give the needle mask its own decoder and train only that "
-                             "(the keypoint maps stay exactly as they were)")
+                        help="after --init (a net without a branch), give the needle mask its own decoder and "
+                             "train only that (the keypoint maps stay exactly as they were)")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
+    if args.needle_branch and not args.init:
+        parser.error("--needle-branch trains a branch off a trained net: give that net with --init")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     torch.set_num_threads(args.threads)
     torch.manual_seed(args.seed)
