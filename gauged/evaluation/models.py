@@ -21,9 +21,9 @@ import numpy as np
 from gauged.evaluation.timing import median_s
 from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.reader.detect import GaugeDetector
-from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, model_path
+from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, OCR_DET_INT8_MODEL, model_path
 from gauged.reader.keypoints import decode_crop_maps
-from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, to_model_input
+from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path, to_model_input
 from gauged.types import StageFailure
 
 
@@ -108,8 +108,11 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
         detector_model: OnnxModel | None = OnnxModel(model_path(DETECTOR_MODEL, models_dir), threads)
     except ModelNotAvailable:
         detector_model = None  # reported as missing rather than failing the crop-model figures
-    models = [m for m in (crop, detector_model) if m is not None]
-    result: dict = {"files_mb": round(sum(m.path.stat().st_size for m in models) / 2**20, 2)}
+    # Every ONNX file the reader ships: the two models and the OCR's int8 text detector.
+    files = [m.path for m in (crop, detector_model) if m is not None]
+    files += [p for p in (packaged_model_path(OCR_DET_INT8_MODEL),) if p.is_file()]
+    result: dict = {"files_mb": round(sum(p.stat().st_size for p in files) / 2**20, 2),
+                    "files": [p.name for p in files]}
     crop_input = np.zeros((crop.input_size, crop.input_size, 3), np.float32)
     result["speed_ms"] = {"crop_model": median_ms(lambda: crop(crop_input))}
     if detector_model is not None:
@@ -131,7 +134,7 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
 
 def format_models(result: dict) -> str:
     speed = result["speed_ms"]
-    lines = [f"model files: {result['files_mb']} MB",
+    lines = [f"model files: {result['files_mb']} MB ({', '.join(result.get('files', []))})",
              f"speed (median of 100): crop {speed['crop_model']:.1f} ms"
              + (f", detector {speed['detector_1280x720']:.1f} ms per 1280x720 frame" if "detector_1280x720" in speed else "")]
     if isinstance(result.get("detector"), str):

@@ -10,7 +10,7 @@ on CPUs with VNNI instructions. The recogniser is left in float: quantizing it s
 and its scores feed the OCR's thresholds.
 
 Calibration inputs are recorded from the float reader itself, reading synthetic renders of seeds
-no training or evaluation set uses (5,000,000 + i) and, when given, real needle-polygons ``train``
+no training or evaluation set uses (5,000,000 + i; only sanity tests render them) and, when given, real needle-polygons ``train``
 photos: the detector sees the rectified rings, polar strips and hint windows the reader cuts, at the
 sizes it cuts them. The output carries, in its ``gauged`` metadata, the SHA-256 of the float file
 it was made from, so the engine uses it only with that file (:mod:`gauged.reader.ocr_engine`).
@@ -33,7 +33,7 @@ import numpy as np
 
 log = logging.getLogger(__name__)
 
-CALIBRATION_SEED = 5_000_000  # no training (0+, 20,000+), validation (1,000,000+) or dev/held-out set (7M, 9M)
+CALIBRATION_SEED = 5_000_000  # no training (0+, 20,000+), validation (1,000,000+) or dev/held-out set (7M, 9M); the shipped-model sanity tests render 5,000,001+ too
 OPSET = 13  # DequantizeLinear's per-channel axis needs opset 13; the wheel's file is opset 11
 
 
