@@ -10,6 +10,8 @@ Torch is imported here and only under ``gauged/training``; the runtime runs the 
 
 from __future__ import annotations
 
+import copy
+
 import torch
 from torch import nn
 from torch.nn import functional as F
@@ -134,8 +136,6 @@ class NeedleBranch(nn.Module):
 
     def __init__(self, up4: _UpBlock, up2: _UpBlock, head: nn.Sequential):
         super().__init__()
-        import copy
-
         self.up4, self.up2 = copy.deepcopy(up4), copy.deepcopy(up2)
         last = head[-1]
         out = nn.Conv2d(last.in_channels, 1, 1)

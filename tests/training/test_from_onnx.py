@@ -51,3 +51,24 @@ def test_an_onnx_file_of_another_architecture_is_refused_naming_the_mismatch(tmp
     wider = CropNet(SIZE, pretrained=False, width=24)
     with pytest.raises(ValueError, match="shape"):
         load_from_onnx(wider, tmp_path / "crop.onnx", torch.zeros(2, 3, SIZE, SIZE))
+
+
+def test_a_net_with_a_needle_branch_reloads_from_its_export_only_when_built_with_the_branch(tmp_path):
+    original = _trained_looking(2)
+    original.add_needle_branch()
+    with torch.no_grad():  # as after training the branch: its weights differ from the copied ones
+        for p in original.needle_branch.parameters():
+            p.add_(0.05 * torch.randn_like(p))
+    original.eval()
+    export_onnx(original, SIZE, tmp_path / "crop.onnx", {"kind": "crop", "size": SIZE, "stride": 2})
+    rng = np.random.default_rng(3)
+    calibration = torch.from_numpy(rng.random((16, 3, SIZE, SIZE), dtype=np.float32))
+    probe = torch.from_numpy(rng.random((2, 3, SIZE, SIZE), dtype=np.float32))
+    with pytest.raises(ValueError, match="convolutions"):
+        load_from_onnx(CropNet(SIZE, pretrained=False, width=16), tmp_path / "crop.onnx", calibration)
+    rebuilt = CropNet(SIZE, pretrained=False, width=16)
+    rebuilt.add_needle_branch()
+    load_from_onnx(rebuilt, tmp_path / "crop.onnx", calibration)
+    rebuilt.eval()
+    with torch.no_grad():
+        assert torch.allclose(rebuilt(probe), original(probe), atol=1e-4)
