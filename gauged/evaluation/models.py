@@ -110,7 +110,9 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
         detector_model = None  # reported as missing rather than failing the crop-model figures
     # Every ONNX file the reader ships: the two models and the OCR's int8 text detector.
     files = [m.path for m in (crop, detector_model) if m is not None]
-    files += [p for p in (packaged_model_path(OCR_DET_INT8_MODEL),) if p.is_file()]
+    ocr_int8 = packaged_model_path(OCR_DET_INT8_MODEL)
+    if ocr_int8.is_file():
+        files.append(ocr_int8)
     result: dict = {"files_mb": round(sum(p.stat().st_size for p in files) / 2**20, 2),
                     "files": [p.name for p in files]}
     crop_input = np.zeros((crop.input_size, crop.input_size, 3), np.float32)

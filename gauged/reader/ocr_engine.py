@@ -152,6 +152,11 @@ def _session(path: Path, threads: int):
     return ort.InferenceSession(str(path), sess_options=session_options(threads), providers=["CPUExecutionProvider"])
 
 
+def file_sha256(path: Path) -> str:
+    """Hex SHA-256 of a file: how an int8 detector names the float file it was made from."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
 def _int8_session(int8_path: Path, float_path: Path, threads: int):
     """A session of the int8 detector when ``int8_path`` was made from ``float_path``; else None,
     with a warning naming the reason (the caller runs the float detector)."""
@@ -160,7 +165,7 @@ def _int8_session(int8_path: Path, float_path: Path, threads: int):
         return None
     session = _session(int8_path, threads)
     made_from = json.loads(session.get_modelmeta().custom_metadata_map.get("gauged", "{}")).get("source_sha256")
-    if made_from != hashlib.sha256(float_path.read_bytes()).hexdigest():
+    if made_from != file_sha256(float_path):
         log.warning("int8 OCR detector %s was made from another file than %s; running the float detector",
                     int8_path, float_path)
         return None

@@ -21,7 +21,6 @@ Needs the ``train`` extra (``onnx``); onnxruntime's quantization tools come with
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import logging
 import sys
@@ -35,10 +34,6 @@ log = logging.getLogger(__name__)
 
 CALIBRATION_SEED = 5_000_000  # no training (0+, 20,000+), validation (1,000,000+) or dev/held-out set (7M, 9M); the shipped-model sanity tests render 5,000,001+ too
 OPSET = 13  # DequantizeLinear's per-channel axis needs opset 13; the wheel's file is opset 11
-
-
-def file_sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 class _Recording:
@@ -132,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=2)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-    from gauged.reader.ocr_engine import find_model_files
+    from gauged.reader.ocr_engine import file_sha256, find_model_files
 
     source, _ = find_model_files(args.package)
     images = calibration_images(args.renders, args.needles, args.photos)

@@ -63,7 +63,9 @@ def run_onnx() -> None:
             model = OnnxModel(path, threads=2)
             out = model(np.zeros((model.input_size, model.input_size, 3), np.float32))
             print(f"onnx: {path.name} -> {out.shape}")
-        run_ocr(REPO / "gauged" / "models" / "ocr_det_int8.onnx")
+        from gauged.reader.factory import OCR_DET_INT8_MODEL
+
+        run_ocr(REPO / "gauged" / "models" / OCR_DET_INT8_MODEL)
         return
     from onnxruntime.datasets import get_example
 

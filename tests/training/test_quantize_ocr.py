@@ -8,8 +8,8 @@ import pytest
 
 pytest.importorskip("onnx", reason="the train extra (onnx) is not installed")
 
-from gauged.reader.ocr_engine import OcrEngine, OcrUnavailable, find_model_files  # noqa: E402
-from gauged.training.quantize_ocr import file_sha256, main  # noqa: E402
+from gauged.reader.ocr_engine import OcrEngine, OcrUnavailable, file_sha256, find_model_files  # noqa: E402
+from gauged.training.quantize_ocr import main  # noqa: E402
 
 
 @pytest.mark.slow
