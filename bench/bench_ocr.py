@@ -182,12 +182,12 @@ def main() -> None:
 
             def det_rec() -> None:
                 found = engine.detect(image, max_side=448)
-                engine.recognize([crop_quad(image, q.quad) for q in found])
+                engine.run_recogniser([crop_quad(image, q.quad) for q in found])
 
             det = median_s(lambda: engine.detect(image, max_side=448), args.runs)
             full = median_s(det_rec, args.runs)
-            rec1 = median_s(lambda: engine.recognize(patches[:1]), args.runs * 3)
-            rec8 = median_s(lambda: engine.recognize(eight), args.runs) / 8
+            rec1 = median_s(lambda: engine.run_recogniser(patches[:1]), args.runs * 3)
+            rec8 = median_s(lambda: engine.run_recogniser(eight), args.runs) / 8
             stage = median_s(lambda: reader.read_markers(image, arc, hints[:0]), max(3, args.runs // 3), warmup=1)
             hinted = median_s(lambda: reader.read_markers(image, arc, hints), max(3, args.runs // 3), warmup=1)
             cpu = cpu_ms(det_rec, max(3, args.runs // 3))

@@ -317,6 +317,7 @@ class ScaleTextReader:
         resolution (any size): the rectified view is sampled from it. Failures: ``no_text``,
         ``no_numbers``.
         """
+        self.engine.forget()  # the memo serves this dial's passes only
         view = self._read_view(crop, arc, hints, detail, arc.zero_angle)
         upright = _image_down(arc)
         if abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN:  # the cheap test first

@@ -25,6 +25,7 @@ import importlib.util
 import json
 import logging
 import math
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +52,7 @@ NUMBER_CHARS = frozenset("0123456789.,-−")
 REC_HEIGHT = 48
 REC_MIN_WIDTH = 128  # PaddleOCR pads to 48 x 320; 128 reads as well on gauge text and is 2-3x faster
 REC_BATCH = 8
+REC_MEMO = 1024  # line images remembered per dial (30 renders: 524 recognitions at most, 16% repeats)
 
 
 class OcrUnavailable(RuntimeError):
@@ -185,10 +187,18 @@ class OcrEngine:
     (:data:`MODEL_SETS`). ``int8_detector`` is an int8 copy of the wheel's text detector
     (``gauged.training.quantize_ocr``); it replaces the float detector when it was made from that
     very file (the SHA-256 in its metadata), else the float one runs and a warning says why.
+
+    ``memo`` is how many line images :meth:`recognize` remembers with their readings until
+    :meth:`forget` (least recently used dropped first; 0 turns it off). The reader's passes over one
+    dial read some lines twice: the quick pass's ink at a hint, then the full pass's same ink, or a
+    box again in its first orientation. On 30 renders 85 of 524 recognitions were such exact
+    repeats. A line read before is answered from the memo, so its reading does not depend on which
+    batch it would have been padded with. The reader forgets at every dial, so a frame never
+    reuses another frame's reading.
     """
 
     def __init__(self, threads: int = 2, package: str = DEFAULT_MODEL_PACKAGE,
-                 int8_detector: Path | None = None) -> None:
+                 int8_detector: Path | None = None, memo: int = REC_MEMO) -> None:
         if threads < 1:
             raise ValueError("threads must be >= 1")
         det_path, rec_path = find_model_files(package)
@@ -208,6 +218,8 @@ class OcrEngine:
         self._chars = ["", *meta["character"].splitlines(), " "]
         self._text_idx = self._class_subset(TEXT_CHARS)
         self._digit_idx = self._class_subset(NUMBER_CHARS)
+        self.memo_size = memo
+        self._memo: OrderedDict[tuple, Recognition] = OrderedDict()
 
     def _class_subset(self, chars: frozenset[str]) -> np.ndarray:
         return np.array([0] + [i for i, c in enumerate(self._chars) if i and c in chars], dtype=np.int64)
@@ -231,8 +243,34 @@ class OcrEngine:
         return db_boxes(prob, (w / nw, h / nh), thresh, box_thresh, unclip_ratio)
 
     # -- recognition -------------------------------------------------------------------------
+    def forget(self) -> None:
+        """Empty the memo of :meth:`recognize` (the reader does at every dial)."""
+        self._memo.clear()
+
     def recognize(self, lines: Sequence[np.ndarray]) -> list[Recognition]:
-        """Read each (h, w, 3) uint8 BGR line image (text left to right, upright)."""
+        """Read each (h, w, 3) uint8 BGR line image (text left to right, upright), each distinct
+        line once: a line in the memo or earlier in ``lines`` is not run through the network again."""
+        keys = [_line_key(line) for line in lines]
+        fresh: dict[tuple, int] = {}  # lines not in the memo: key -> index of the first such line
+        for i, key in enumerate(keys):
+            if key not in self._memo and key not in fresh:
+                fresh[key] = i
+        read = dict(zip(fresh, self.run_recogniser([lines[i] for i in fresh.values()]), strict=True))
+        out = []
+        for key in keys:
+            if key in read:
+                out.append(read[key])
+            else:
+                out.append(self._memo[key])
+                self._memo.move_to_end(key)
+        if self.memo_size > 0:
+            self._memo.update(read)
+            while len(self._memo) > self.memo_size:
+                self._memo.popitem(last=False)
+        return out
+
+    def run_recogniser(self, lines: Sequence[np.ndarray]) -> list[Recognition]:
+        """The recogniser network on every line, in batches of lines of similar aspect (no memo)."""
         out: list[Recognition | None] = [None] * len(lines)
         order = sorted(range(len(lines)), key=lambda i: lines[i].shape[1] / max(1, lines[i].shape[0]))
         for start in range(0, len(order), REC_BATCH):
@@ -249,6 +287,11 @@ class OcrEngine:
                 digits, dscore = ctc_greedy(probs[k], self._digit_idx, self._chars)
                 out[i] = Recognition(text.strip(), score, digits, dscore)
         return [r for r in out if r is not None]
+
+
+def _line_key(line: np.ndarray) -> tuple:
+    """A line image's identity for the memo: its shape and a digest of its pixels."""
+    return (line.shape, hashlib.blake2b(np.ascontiguousarray(line).tobytes(), digest_size=16).digest())
 
 
 def ctc_greedy(probs: np.ndarray, classes: np.ndarray, chars: Sequence[str]) -> tuple[str, float]:

@@ -232,6 +232,26 @@ def test_engine_loads_and_reads_without_network(monkeypatch):
     assert rec.text == "160" and rec.digits == "160" and rec.score > 0.9
 
 
+def test_engine_reads_each_distinct_line_once_until_it_forgets():
+    try:
+        engine = OcrEngine(threads=1, memo=2)
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR engine not installed ({exc}); {INSTALL}")
+    lines = []
+    for text in ("160", "25", "4"):
+        line = np.full((48, 120, 3), 235, np.uint8)
+        cv2.putText(line, text, (20, 36), cv2.FONT_HERSHEY_SIMPLEX, 1.2, (20, 20, 20), 3, cv2.LINE_AA)
+        lines.append(line)
+    a, b, a_again = engine.recognize([lines[0], lines[1], lines[0].copy()])
+    assert (a.text, b.text) == ("160", "25") and a_again is a  # one network reading for both copies
+    assert engine.recognize([lines[1]])[0] is b  # answered from the memo
+    engine.recognize([lines[2]])  # the memo holds two lines: the least recently used ("160") goes
+    assert engine.recognize([lines[1]])[0] is b and engine.recognize([lines[0]])[0] is not a
+    engine.forget()
+    fresh = engine.recognize([lines[1]])[0]
+    assert fresh is not b and fresh.text == "25"
+
+
 def test_find_model_files_names_missing_and_unknown_packages(monkeypatch):
     from gauged.reader import ocr_engine
 
