@@ -87,6 +87,39 @@ def conic_to_ellipse(conic: np.ndarray) -> Ellipse | StageFailure:
     return normalized_ellipse(centre[0], centre[1], max(semi), min(semi), theta)
 
 
+def conic_forms(conics: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`conic_to_ellipse` of K conics (K, 6) at once, as the matrix form RANSAC scores with.
+
+    Returns ``(centre (K, 2), form (K, 2, 2), a (K,), b (K,), ok (K,))``: the ellipse is
+    ``(p - centre)^T form (p - centre) = 1`` with semi-axes ``a >= b``; ``ok`` is False where
+    :func:`conic_to_ellipse` fails (the same tests), and those rows are meaningless.
+    """
+    conics = np.asarray(conics, dtype=float)
+    finite = np.all(np.isfinite(conics), axis=1)
+    conics = np.where(finite[:, None], conics, 0.0)
+    norms = np.linalg.norm(conics, axis=1)
+    conics = conics / np.where(norms > 0.0, norms, 1.0)[:, None]
+    a_, b_, c_, d_, e_, f_ = conics.T
+    det = a_ * c_ - 0.25 * b_ * b_
+    ok = finite & (det > 1e-14 * (a_ * a_ + 0.5 * b_ * b_ + c_ * c_))
+    safe = np.where(ok, det, 1.0)
+    # The centre solves 2 Q c = -(D, E) (Cramer's rule on the 2x2 system).
+    cx = (-d_ * c_ + 0.5 * b_ * e_) / (2.0 * safe)
+    cy = (-e_ * a_ + 0.5 * b_ * d_) / (2.0 * safe)
+    k = -(f_ + 0.5 * (d_ * cx + e_ * cy))
+    # Eigenvalues of Q = [[A, B/2], [B/2, C]], smaller first.
+    mid, half = 0.5 * (a_ + c_), np.hypot(0.5 * (a_ - c_), 0.5 * b_)
+    lam_small, lam_large = mid - half, mid + half
+    ok &= (lam_small * k > 0.0) & (lam_large * k > 0.0)
+    k = np.where(ok, k, 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        semi = np.sqrt(np.stack([k / lam_small, k / lam_large]))  # the conic's sign is arbitrary
+    semi_major, semi_minor = semi.max(axis=0), semi.min(axis=0)
+    ok &= np.isfinite(semi_major) & np.isfinite(semi_minor) & np.isfinite(cx) & np.isfinite(cy)
+    form = np.stack([np.stack([a_, 0.5 * b_], axis=1), np.stack([0.5 * b_, c_], axis=1)], axis=1) / k[:, None, None]
+    return np.stack([cx, cy], axis=1), form, semi_major, semi_minor, ok
+
+
 def ellipse_matrix(ellipse: Ellipse) -> np.ndarray:
     """The symmetric 3x3 conic matrix ``C`` with ``[x, y, 1] C [x, y, 1]^T = 0`` on the ellipse."""
     a_, b_, c_, d_, e_, f_ = ellipse_to_conic(ellipse)

@@ -53,11 +53,11 @@ def _first_quadrant_root(r0: np.ndarray, z0: np.ndarray, z1: np.ndarray, g: np.n
     for _ in range(_BISECTIONS):
         mid = 0.5 * (lo + hi)
         value = (n0 / (mid + r0)) ** 2 + (z1 / (mid + 1.0)) ** 2 - 1.0
-        lo = np.where(value > 0.0, mid, lo)
-        hi = np.where(value < 0.0, mid, hi)
-        exact = value == 0.0
-        lo = np.where(exact, mid, lo)
-        hi = np.where(exact, mid, hi)
+        new_lo = np.where(value >= 0.0, mid, lo)  # an exact root closes the bracket from both sides
+        new_hi = np.where(value <= 0.0, mid, hi)
+        if np.array_equal(new_lo, lo) and np.array_equal(new_hi, hi):
+            break  # a fixed point: the remaining steps would change nothing (about 60 steps in doubles)
+        lo, hi = new_lo, new_hi
     return 0.5 * (lo + hi)
 
 

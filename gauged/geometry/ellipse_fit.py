@@ -6,6 +6,7 @@
   split into quadratic and linear blocks (their eqs. 11-15) so the generalised eigenproblem becomes a
   well-posed 3x3 ordinary one. Points are first centred on their mean and scaled to unit RMS radius
   (Hartley-style normalisation) so the monomials ``x^2 .. 1`` have comparable magnitudes.
+  :func:`fit_ellipses_direct` is the same fit of many point sets at once (RANSAC samples).
 - :func:`fit_circle` -- N. Chernov's SVD form of V. Pratt, "Direct least-squares fitting of algebraic
   surfaces", SIGGRAPH 1987 (``method="pratt"``, default: nearly unbiased on short arcs), or
   I. Kasa, "A circle fitting procedure and its error analysis", IEEE TIM 1976 (``method="kasa"``,
@@ -24,11 +25,12 @@ Example:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
-from gauged.geometry.conic import STAGE, conic_to_ellipse, normalized_ellipse
+from gauged.geometry.conic import STAGE, conic_forms, conic_to_ellipse, normalized_ellipse
 from gauged.geometry.dial_frame import as_points
 from gauged.geometry.ellipse_distance import orthogonal_distance
 from gauged.geometry.ellipse_refine import refine_ellipse
@@ -57,6 +59,36 @@ def _denormalize(ellipse: Ellipse, mean: np.ndarray, scale: float) -> Ellipse:
     )
 
 
+def _direct_conics(norm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Halir-Flusser on K normalised point sets (K, N, 2), N >= 5, at once.
+
+    Returns the conics (K, 6) in the normalised frame and a status (K,) int: 0 fitted, 1 fewer than 5
+    independent points, 2 no eigenvector satisfies the ellipse constraint (conics of status != 0 are
+    meaningless).
+    """
+    x, y = norm[..., 0], norm[..., 1]
+    d1 = np.stack([x * x, x * y, y * y], axis=-1)  # quadratic part of the design matrix
+    d2 = np.stack([x, y, np.ones_like(x)], axis=-1)  # linear part
+    singular = np.linalg.svd(np.concatenate([d1, d2], axis=-1), compute_uv=False)
+    status = np.where(singular[:, 4] <= _RANK_TOLERANCE * singular[:, 0], 1, 0)
+    d1t = np.swapaxes(d1, 1, 2)
+    s1, s2, s3 = d1t @ d1, d1t @ d2, np.swapaxes(d2, 1, 2) @ d2
+    s3[status == 1] = np.eye(3)  # collinear points: s3 is singular, and the fit is refused anyway
+    t = -np.linalg.solve(s3, np.swapaxes(s2, 1, 2))  # eq. 14: the linear coefficients from the quadratic
+    m = s1 + s2 @ t  # reduced scatter matrix, eq. 15
+    m = np.stack([m[:, 2] / 2.0, -m[:, 1], m[:, 0] / 2.0], axis=1)  # premultiply by inv(C1)
+    _, vectors = np.linalg.eig(m)
+    vectors = np.real(vectors)
+    # Exactly one eigenvector satisfies the ellipse constraint 4 a0 a2 - a1^2 > 0 (their sec. 3);
+    # taking the most elliptic one is the same thing and is robust to rounding on exact data.
+    cond = (4.0 * vectors[:, 0] * vectors[:, 2] - vectors[:, 1] ** 2) / np.sum(vectors * vectors, axis=1)
+    best = np.argmax(cond, axis=1)
+    rows = np.arange(len(norm))
+    status = np.where((status == 0) & (cond[rows, best] <= 0.0), 2, status)
+    quadratic = vectors[rows, :, best]
+    return np.concatenate([quadratic, (t @ quadratic[:, :, None])[:, :, 0]], axis=1), status
+
+
 def fit_ellipse_direct(points: np.ndarray) -> Ellipse | StageFailure:
     """Halir-Flusser direct least-squares ellipse through points (N, 2) px, N >= 5.
 
@@ -69,29 +101,52 @@ def fit_ellipse_direct(points: np.ndarray) -> Ellipse | StageFailure:
     if len(points) < 5:
         return StageFailure(STAGE, "too_few_points", f"{len(points)} points, an ellipse needs 5")
     norm, mean, scale = _normalize(points)
-    x, y = norm[:, 0], norm[:, 1]
-    d1 = np.stack([x * x, x * y, y * y], axis=1)  # quadratic part of the design matrix
-    d2 = np.stack([x, y, np.ones_like(x)], axis=1)  # linear part
-    singular = np.linalg.svd(np.hstack([d1, d2]), compute_uv=False)
-    if singular[4] <= _RANK_TOLERANCE * singular[0]:
+    conics, status = _direct_conics(norm[None])
+    if status[0] == 1:
         return StageFailure(STAGE, "degenerate_conic", "fewer than 5 independent points (duplicates or a line)")
-    s1, s2, s3 = d1.T @ d1, d1.T @ d2, d2.T @ d2
-    t = -np.linalg.solve(s3, s2.T)  # eq. 14: the linear coefficients as a function of the quadratic
-    m = s1 + s2 @ t  # reduced scatter matrix, eq. 15
-    m = np.array([m[2] / 2.0, -m[1], m[0] / 2.0])  # premultiply by inv(C1), the constraint matrix
-    _, vectors = np.linalg.eig(m)
-    vectors = np.real(vectors)
-    # Exactly one eigenvector satisfies the ellipse constraint 4 a0 a2 - a1^2 > 0 (their sec. 3);
-    # taking the most elliptic one is the same thing and is robust to rounding on exact data.
-    cond = (4.0 * vectors[0] * vectors[2] - vectors[1] ** 2) / np.sum(vectors * vectors, axis=0)
-    best = int(np.argmax(cond))
-    if cond[best] <= 0.0:
+    if status[0] == 2:
         return StageFailure(STAGE, "degenerate_conic", "no eigenvector satisfies the ellipse constraint")
-    quadratic = vectors[:, best]
-    fitted = conic_to_ellipse(np.concatenate([quadratic, t @ quadratic]))
+    fitted = conic_to_ellipse(conics[0])
     if not fitted:
         return fitted
     return _denormalize(fitted, mean, scale)
+
+
+@dataclass(frozen=True, slots=True)
+class EllipseHypotheses:
+    """K ellipses in matrix form, for scoring many RANSAC samples at once: a point ``p`` (px) lies at
+    normalised radius ``sqrt((p - centre)^T form (p - centre))`` (1 on the ellipse); ``a``, ``b``
+    are the semi-axes (px, ``a >= b``) and ``ok`` marks the samples that gave a real ellipse (the
+    other rows are meaningless)."""
+
+    centre: np.ndarray  # (K, 2)
+    form: np.ndarray  # (K, 2, 2)
+    a: np.ndarray  # (K,)
+    b: np.ndarray  # (K,)
+    ok: np.ndarray  # (K,) bool
+
+    def normalized_radius(self, points: np.ndarray) -> np.ndarray:
+        """(K, N) radius of each of points (N, 2) in each ellipse's affine dial frame."""
+        d = np.asarray(points, float)[None] - self.centre[:, None]
+        with np.errstate(invalid="ignore"):
+            return np.sqrt(np.einsum("kni,kij,knj->kn", d, self.form, d))
+
+
+def fit_ellipses_direct(samples: np.ndarray) -> EllipseHypotheses:
+    """:func:`fit_ellipse_direct` of K point sets (K, N, 2) px, N >= 5, in one vectorised pass.
+
+    A sample is ``ok`` exactly when :func:`fit_ellipse_direct` would return an ellipse for it (the
+    same rank, constraint and :func:`gauged.geometry.conic.conic_to_ellipse` tests, up to rounding).
+    """
+    samples = np.asarray(samples, float)
+    mean = samples.mean(axis=1, keepdims=True)
+    centred = samples - mean
+    scale = np.sqrt(np.mean(np.sum(centred * centred, axis=2), axis=1))
+    scale = np.where(scale == 0.0, 1.0, scale)  # identical points: the rank test refuses them
+    conics, status = _direct_conics(centred / scale[:, None, None])
+    centre, form, a, b, ok = conic_forms(conics)
+    return EllipseHypotheses(centre * scale[:, None] + mean[:, 0], form / (scale * scale)[:, None, None],
+                             a * scale, b * scale, ok & (status == 0))
 
 
 def fit_circle(points: np.ndarray, method: Literal["pratt", "kasa"] = "pratt") -> Ellipse | StageFailure:

@@ -21,7 +21,7 @@ from gauged.geometry.angles import scale_span, unwrap, wrap_angle, wrap_to_pi
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.ellipse_distance import orthogonal_distance
 from gauged.geometry.conic import conic_to_ellipse
-from gauged.geometry.ellipse_fit import fit_circle, fit_ellipse, fit_ellipse_direct
+from gauged.geometry.ellipse_fit import fit_circle, fit_ellipse, fit_ellipses_direct
 from gauged.reader.keypoints import CropKeypoints
 from gauged.types import Ellipse, StageFailure
 
@@ -187,19 +187,22 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 300) -> tuple[E
         return ellipse, np.ones(count, bool)
     rng = np.random.default_rng(0)
     best_keep, best_cost, needed = None, np.inf, trials
-    for trial in range(trials):
-        if trial >= max(MIN_TRIALS, needed):
-            break
-        subset = points[rng.choice(count, sample, replace=False)]
-        hypothesis = fit_ellipse_direct(subset) if sample == 5 else fit_circle(subset)
-        if isinstance(hypothesis, StageFailure) or hypothesis.b < 0.2 * hypothesis.a:
-            continue
-        # Radial distance in the dial frame: cheap, and close to the orthogonal one near the ring.
-        dist = np.abs(normalized_radius(hypothesis, points) - 1.0) * np.sqrt(hypothesis.a * hypothesis.b)
-        cost = float(np.minimum(dist, tol_px).sum())  # MSAC (Torr & Zisserman 2000)
-        if cost < best_cost:
-            best_cost, best_keep = cost, dist <= tol_px
-            needed = _trials_needed(best_keep.mean(), sample, trials)
+    trial = 0
+    while trial < min(trials, max(MIN_TRIALS, needed)):
+        # The samples up to the current stopping count are drawn and scored in one batch, then taken
+        # in order: the same search, sample for sample, as one hypothesis at a time.
+        subsets = [rng.choice(count, sample, replace=False) for _ in range(trial, min(trials, max(MIN_TRIALS, needed)))]
+        dists, usable = _hypothesis_distances(points, points[np.array(subsets)])
+        for dist, ok in zip(dists, usable, strict=True):
+            if trial >= max(MIN_TRIALS, needed):
+                break
+            trial += 1
+            if not ok:
+                continue
+            cost = float(np.minimum(dist, tol_px).sum())  # MSAC (Torr & Zisserman 2000)
+            if cost < best_cost:
+                best_cost, best_keep = cost, dist <= tol_px
+                needed = _trials_needed(best_keep.mean(), sample, trials)
     if best_keep is None or best_keep.sum() < 3:
         return StageFailure(STAGE, "degenerate_conic", "no ellipse hypothesis from the notches")
     keep = best_keep
@@ -212,6 +215,23 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 300) -> tuple[E
             break
         keep = new_keep
     return ellipse, keep
+
+
+def _hypothesis_distances(points: np.ndarray, subsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distances (K, N) px of ``points`` from the ellipse (5-point ``subsets``) or circle (3 points)
+    through each of the K subsets (K, n, 2), and which hypotheses are usable: a real ellipse not
+    flatter than 1:5. The distance is radial in the hypothesis's dial frame: cheap, and close to the
+    orthogonal one near the ring."""
+    if subsets.shape[1] == 5:
+        hypotheses = fit_ellipses_direct(subsets)
+        usable = hypotheses.ok & (hypotheses.b >= 0.2 * hypotheses.a)
+        radius = np.where(usable[:, None], hypotheses.normalized_radius(points), 1.0)
+        return np.abs(radius - 1.0) * np.sqrt(np.abs(hypotheses.a * hypotheses.b))[:, None], usable
+    circles = [fit_circle(subset) for subset in subsets]  # 4-5 notches only: a handful of samples
+    usable = np.array([not isinstance(c, StageFailure) for c in circles])
+    dists = np.array([np.abs(normalized_radius(c, points) - 1.0) * c.a if ok else np.zeros(len(points))
+                      for c, ok in zip(circles, usable, strict=True)])
+    return dists, usable
 
 
 def _trials_needed(inlier_share: float, sample: int, cap: int) -> int:

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from gauged.geometry.ellipse_distance import orthogonal_distance
-from gauged.geometry.ellipse_fit import fit_circle, fit_ellipse, fit_ellipse_direct
+from gauged.geometry.dial_frame import normalized_radius
+from gauged.geometry.ellipse_fit import fit_circle, fit_ellipse, fit_ellipse_direct, fit_ellipses_direct
 from gauged.types import Ellipse, StageFailure
 
 
@@ -182,3 +183,24 @@ def test_fit_ellipse_auto_falls_back_to_a_circle_when_the_ellipse_is_degenerate(
     points = np.repeat(truth.point_at(np.array([0.0, 2.0, 4.0])), 2, axis=0)  # 6 points, 3 distinct
     assert fit_ellipse_direct(points).reason == "degenerate_conic"
     _assert_close(fit_ellipse(points, shape="auto"), truth, rel=1e-9)
+
+
+def test_fit_ellipses_direct_agrees_with_one_fit_at_a_time():
+    rng = np.random.default_rng(3)
+    truth = Ellipse(200.0, 210.0, 120.0, 80.0, 0.4)
+    on_ring = truth.point_at(rng.uniform(0.0, 2 * math.pi, 9)) + rng.normal(0.0, 1.0, (9, 2))
+    scattered = rng.normal(200.0, 60.0, (9, 2))  # many 5-point samples of these are hyperbolas
+    samples = [on_ring[:5], on_ring[4:], scattered[:5], scattered[3:8], scattered[4:]]
+    samples.append(np.repeat(on_ring[:1], 5, axis=0))  # one point five times
+    samples.append(np.stack([np.arange(5.0), 2.0 * np.arange(5.0)], axis=1))  # a line
+    batch = fit_ellipses_direct(np.stack(samples))
+    radius = batch.normalized_radius(on_ring)
+    for k, sample in enumerate(samples):
+        one = fit_ellipse_direct(sample)
+        assert bool(one) == bool(batch.ok[k]), k
+        if one:
+            assert batch.a[k] == pytest.approx(one.a, rel=1e-9) and batch.b[k] == pytest.approx(one.b, rel=1e-9)
+            assert np.allclose(batch.centre[k], one.center, rtol=1e-9)
+            assert np.allclose(radius[k], normalized_radius(one, on_ring), rtol=1e-9)
+    assert batch.ok[:2].all() and not batch.ok[5:].any()
+    assert np.allclose(batch.normalized_radius(samples[0])[0], 1.0, atol=1e-6)  # five points fix the conic
