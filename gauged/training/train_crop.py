@@ -82,6 +82,18 @@ def make_batches(shards, size: int, batch: int, seed: int, weights: list[float],
     return batches
 
 
+def has_needle_branch(init: Path) -> bool:
+    """Whether the ``--init`` file is a crop model with a needle decoder of its own (an ONNX export
+    whose metadata says so, or a checkpoint holding ``needle_branch.`` weights)."""
+    if init.suffix == ".onnx":
+        import onnx
+
+        meta = {p.key: p.value for p in onnx.load(str(init), load_external_data=False).metadata_props}
+        return bool(json.loads(meta.get("gauged", "{}")).get("needle_branch"))
+    state = torch.load(init, map_location="cpu", weights_only=False)["model"]
+    return any(key.startswith("needle_branch.") for key in state)
+
+
 def _loss(model, batch):
     x, target, valid = batch
     return crop_loss(model(x), target, valid)
@@ -191,12 +203,17 @@ def main(argv: list[str] | None = None) -> int:
     # channels_last makes the depthwise convolutions' backward pass ~1.7x faster on CPU (measured).
     # Any --init sets every weight, so the ImageNet ones are not loaded first.
     model = CropNet(args.size, pretrained=not (args.scratch or args.init)).to(memory_format=torch.channels_last)
+    init_has_branch = bool(args.init) and has_needle_branch(args.init)
+    if init_has_branch and not args.needle_branch:
+        parser.error(f"--init {args.init} has a needle branch: continue it with --needle-branch")
+    if init_has_branch:
+        model.add_needle_branch()  # before loading, so the export's convolutions match the net's
     if args.init:
         from gauged.training.from_onnx import initialise
 
         log.info(initialise(model, args.init, lambda: torch.from_numpy(np.stack(
             [augmented(shards[0].sample(i), args.size, None, 0.0)[0] for i in range(min(48, len(shards[0])))]))))
-    if args.needle_branch:
+    if args.needle_branch and not init_has_branch:
         model.add_needle_branch()
         model.to(memory_format=torch.channels_last)
         log.info("needle branch: %d trainable parameters, the rest frozen",

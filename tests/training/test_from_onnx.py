@@ -72,3 +72,16 @@ def test_a_net_with_a_needle_branch_reloads_from_its_export_only_when_built_with
     rebuilt.eval()
     with torch.no_grad():
         assert torch.allclose(rebuilt(probe), original(probe), atol=1e-4)
+
+
+def test_train_crop_knows_an_init_with_a_needle_branch(tmp_path):
+    from gauged.training.train_crop import has_needle_branch
+
+    plain, branched = _trained_looking(2), _trained_looking(2)
+    branched.add_needle_branch()
+    for net, name, branch in ((plain, "plain", False), (branched, "branched", True)):
+        net.eval()
+        export_onnx(net, SIZE, tmp_path / f"{name}.onnx", {"kind": "crop", "size": SIZE, "stride": 2, "needle_branch": branch})
+        torch.save({"model": net.state_dict()}, tmp_path / f"{name}.pt")
+        assert has_needle_branch(tmp_path / f"{name}.onnx") is branch
+        assert has_needle_branch(tmp_path / f"{name}.pt") is branch
