@@ -5,7 +5,9 @@ Labels: ``labels.json`` (a list) or ``labels.jsonl`` (one object per line) with 
 error of an image is ``|pred - reading| / (max - min)``. A refused image counts as a failure; errors
 are averaged over attempted images, and over all images with a failure counted as 100%. Images whose
 true reading sits at a scale end (needle at rest) are reported separately, so a reader that always
-answers "minimum" cannot look good.
+answers "minimum" cannot look good. Synthetic records (``gauged synth images``) also carry the printed
+numbers' boxes: the table then breaks the images down by the height of the main scale's numbers in
+the image (:data:`NUMBER_HEIGHTS`), which is where most OCR refusals come from.
 """
 
 from __future__ import annotations
@@ -20,6 +22,9 @@ import numpy as np
 
 from gauged.types import StageFailure
 
+# Bins (px) of the median printed-number height of an image's main scale, for the breakdown table.
+NUMBER_HEIGHTS = ((0.0, 10.0), (10.0, 14.0), (14.0, 18.0), (18.0, float("inf")))
+
 
 @dataclass(frozen=True)
 class Label:
@@ -27,6 +32,7 @@ class Label:
     reading: float
     min: float
     max: float
+    number_px: float | None = None  # median height (px) of the main scale's printed numbers, when labelled
 
     @property
     def at_rest(self) -> bool:
@@ -64,7 +70,18 @@ def _label(item: dict) -> Label:
     if "reading" in item:
         return Label(str(item["image"]), float(item["reading"]), float(item["min"]), float(item["max"]))
     gauge = max(item["gauges"], key=lambda g: (g["box"][2] - g["box"][0]) * (g["box"][3] - g["box"][1]))
-    return Label(str(item["image"]), float(gauge["value"]), float(gauge["min"]), float(gauge["max"]))
+    return Label(str(item["image"]), float(gauge["value"]), float(gauge["min"]), float(gauge["max"]),
+                 _number_height(gauge))
+
+
+def _number_height(gauge: dict) -> float | None:
+    """Median height (px) of the printed numbers of a synthetic gauge's primary scale (the mean length
+    of each number quad's two sides across its reading direction), or None when not labelled."""
+    scales = [s for s in gauge.get("scales", ()) if s.get("role") == "primary"]
+    quads = [np.asarray(n["quad"], float) for s in scales for n in s.get("numbers", ()) if n.get("quad")]
+    if not quads:
+        return None
+    return float(np.median([0.5 * (np.linalg.norm(q[3] - q[0]) + np.linalg.norm(q[2] - q[1])) for q in quads]))
 
 
 def image_path(folder: Path, label: Label) -> Path:
@@ -111,23 +128,35 @@ def evaluate(labels: list[Label], read: Callable[[Label], tuple[float | None, St
     return [Outcome(label, *read(label)) for label in labels]
 
 
+def _height_bin(low: float, high: float) -> str:
+    return f"numbers >= {low:g} px" if high == float("inf") else f"numbers {low:g}-{high:g} px"
+
+
 def report(outcomes: list[Outcome]) -> dict:
-    """The whole table: all images, the needle-at-rest subset and the rest."""
-    return {
+    """The whole table: all images, the needle-at-rest subset and the rest, and (when the labels
+    carry number boxes) the images by printed-number height."""
+    result = {
         "all": summarize(outcomes).to_dict(),
         "needle_at_rest": summarize([o for o in outcomes if o.label.at_rest]).to_dict(),
         "needle_off_rest": summarize([o for o in outcomes if not o.label.at_rest]).to_dict(),
         "images": [{"image": o.label.image, "truth": o.label.reading, "value": o.value,
-                    "relative_error": o.relative_error,
+                    "relative_error": o.relative_error, "number_px": o.label.number_px,
                     "failure": None if o.failure is None else o.failure.to_dict()} for o in outcomes],
     }
+    if any(o.label.number_px is not None for o in outcomes):
+        result["by_number_height"] = {
+            _height_bin(low, high): summarize([o for o in outcomes if o.label.number_px is not None
+                                               and low <= o.label.number_px < high]).to_dict()
+            for low, high in NUMBER_HEIGHTS}
+    return result
 
 
 def format_table(result: dict) -> str:
-    lines = [f"{'subset':<16} {'images':>6} {'failed':>7} {'mean err':>9} {'median':>8} {'mean(all)':>9} {'max err':>8}"]
-    for name in ("all", "needle_at_rest", "needle_off_rest"):
-        s = result[name]
-        lines.append(f"{name:<16} {s['count']:>6} {s['failure_rate']:>7.1%} {s['mean_relative_error']:>9.2%} "
+    lines = [f"{'subset':<19} {'images':>6} {'failed':>7} {'mean err':>9} {'median':>8} {'mean(all)':>9} {'max err':>8}"]
+    rows = [(name, result[name]) for name in ("all", "needle_at_rest", "needle_off_rest")]
+    rows += list(result.get("by_number_height", {}).items())
+    for name, s in rows:
+        lines.append(f"{name:<19} {s['count']:>6} {s['failure_rate']:>7.1%} {s['mean_relative_error']:>9.2%} "
                      f"{s['median_relative_error']:>8.2%} {s['mean_relative_error_all']:>9.2%} {s['max_relative_error']:>8.2%}")
     reasons = result["all"]["failures_by_reason"]
     if reasons:
