@@ -52,7 +52,7 @@ NUMBER_CHARS = frozenset("0123456789.,-−")
 REC_HEIGHT = 48
 REC_MIN_WIDTH = 128  # PaddleOCR pads to 48 x 320; 128 reads as well on gauge text and is 2-3x faster
 REC_BATCH = 8
-REC_MEMO = 1024  # line images remembered per dial (30 renders: 524 recognitions at most, 16% repeats)
+REC_MEMO = 1024  # line images remembered per dial: a dial's passes read some tens (30 renders: 524 in all)
 
 
 class OcrUnavailable(RuntimeError):
