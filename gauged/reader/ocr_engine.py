@@ -25,6 +25,7 @@ import importlib.util
 import json
 import logging
 import math
+import threading
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -180,8 +181,9 @@ def _normalise(image_bgr: np.ndarray) -> np.ndarray:
 
 
 class OcrEngine:
-    """The detector and recogniser sessions, created once and reused (not thread-safe to share
-    across threads that change ``threads``; one engine per worker is the intended use).
+    """The detector and recogniser sessions, created once and reused. The daemon's camera threads
+    share one engine: onnxruntime sessions may be run from several threads, and the memo below is
+    kept per thread.
 
     ``threads`` is onnxruntime's intra-op thread count. ``package`` picks the model set
     (:data:`MODEL_SETS`). ``int8_detector`` is an int8 copy of the wheel's text detector
@@ -194,7 +196,8 @@ class OcrEngine:
     box again in its first orientation. On 30 renders 85 of 524 recognitions were such exact
     repeats. A line read before is answered from the memo, so its reading does not depend on which
     batch it would have been padded with. The reader forgets at every dial, so a frame never
-    reuses another frame's reading.
+    reuses another frame's reading. Each thread has its own memo: one camera's dial does not empty
+    another's in the middle of its passes.
     """
 
     def __init__(self, threads: int = 2, package: str = DEFAULT_MODEL_PACKAGE,
@@ -219,7 +222,7 @@ class OcrEngine:
         self._text_idx = self._class_subset(TEXT_CHARS)
         self._digit_idx = self._class_subset(NUMBER_CHARS)
         self.memo_size = memo
-        self._memo: OrderedDict[tuple, Recognition] = OrderedDict()
+        self._local = threading.local()
 
     def _class_subset(self, chars: frozenset[str]) -> np.ndarray:
         return np.array([0] + [i for i, c in enumerate(self._chars) if i and c in chars], dtype=np.int64)
@@ -243,17 +246,26 @@ class OcrEngine:
         return db_boxes(prob, (w / nw, h / nh), thresh, box_thresh, unclip_ratio)
 
     # -- recognition -------------------------------------------------------------------------
+    @property
+    def _memo(self) -> OrderedDict[tuple, Recognition]:
+        """This thread's memo of :meth:`recognize`."""
+        memo = getattr(self._local, "memo", None)
+        if memo is None:
+            memo = self._local.memo = OrderedDict()
+        return memo
+
     def forget(self) -> None:
-        """Empty the memo of :meth:`recognize` (the reader does at every dial)."""
+        """Empty this thread's memo of :meth:`recognize` (the reader does at every dial)."""
         self._memo.clear()
 
     def recognize(self, lines: Sequence[np.ndarray]) -> list[Recognition]:
         """Read each (h, w, 3) uint8 BGR line image (text left to right, upright), each distinct
         line once: a line in the memo or earlier in ``lines`` is not run through the network again."""
+        memo = self._memo
         keys = [_line_key(line) for line in lines]
         fresh: dict[tuple, int] = {}  # lines not in the memo: key -> index of the first such line
         for i, key in enumerate(keys):
-            if key not in self._memo and key not in fresh:
+            if key not in memo and key not in fresh:
                 fresh[key] = i
         read = dict(zip(fresh, self.run_recogniser([lines[i] for i in fresh.values()]), strict=True))
         out = []
@@ -261,12 +273,12 @@ class OcrEngine:
             if key in read:
                 out.append(read[key])
             else:
-                out.append(self._memo[key])
-                self._memo.move_to_end(key)
+                out.append(memo[key])
+                memo.move_to_end(key)
         if self.memo_size > 0:
-            self._memo.update(read)
-            while len(self._memo) > self.memo_size:
-                self._memo.popitem(last=False)
+            memo.update(read)
+            while len(memo) > self.memo_size:
+                memo.popitem(last=False)
         return out
 
     def run_recogniser(self, lines: Sequence[np.ndarray]) -> list[Recognition]:

@@ -251,6 +251,21 @@ def test_engine_reads_each_distinct_line_once_until_it_forgets():
     fresh = engine.recognize([lines[1]])[0]
     assert fresh is not b and fresh.text == "25"
 
+    # Camera threads share the engine: each has its own memo, which another's forget() leaves alone.
+    import threading
+
+    seen = {}
+
+    def other_camera():
+        seen["first"] = engine.recognize([lines[1]])[0]
+        engine.forget()
+
+    worker = threading.Thread(target=other_camera)
+    worker.start()
+    worker.join()
+    assert seen["first"] is not fresh  # the other thread's memo did not hold this thread's reading
+    assert engine.recognize([lines[1]])[0] is fresh  # and its forget() did not empty this one
+
 
 def test_find_model_files_names_missing_and_unknown_packages(monkeypatch):
     from gauged.reader import ocr_engine
