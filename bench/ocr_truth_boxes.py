@@ -6,7 +6,7 @@
 A synthetic set (``gauged synth images``) labels every printed number with its quad. This script
 gives the OCR recogniser each number of the main scale cut at its true quad (grown by a quarter, as
 the reader's own boxes are), so no text detection, hint or rectification is involved, and counts the
-numbers read right (the exact value, score >= the reader's 0.5), grouped by what the reader made of
+numbers read right (the exact value, score >= the reader's ``min_score``), grouped by what the reader made of
 the image in ``--report`` (read, or the reason it refused). Numbers read right at their true boxes
 on a refused image were lost to localisation; numbers not read even there, to recognition.
 """
@@ -26,10 +26,10 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gauged.reader.numbers import parse_number  # noqa: E402
-from gauged.reader.ocr_engine import OcrEngine, crop_quad  # noqa: E402
+from gauged.reader.ocr import ScaleTextReader  # noqa: E402
+from gauged.reader.ocr_engine import crop_quad  # noqa: E402
 
 GROUPS = ("read", "ocr/no_text", "scale/too_few_markers", "scale/too_few_inliers")
-MIN_SCORE = 0.5  # the reader's ScaleTextReader.min_score
 MARGIN = 1.25  # quads grown about their centre by this factor
 
 
@@ -44,7 +44,8 @@ def main() -> int:
     for image in json.loads(args.report.read_text())["images"]:
         failure = image["failure"]
         outcome[image["image"]] = "read" if failure is None else f"{failure['stage']}/{failure['reason']}"
-    engine = OcrEngine(threads=args.threads)
+    reader = ScaleTextReader(threads=args.threads)  # its engine and its score threshold
+    engine = reader.engine
     counts: dict[str, list[int]] = defaultdict(lambda: [0, 0, 0])  # images, numbers, read right
     for line in (args.data / "labels.jsonl").read_text().splitlines():
         record = json.loads(line)
@@ -63,7 +64,7 @@ def main() -> int:
         right = 0
         for rec, number in zip(engine.recognize(lines), numbers, strict=True):
             parsed = parse_number(rec.text)
-            right += bool(parsed) and rec.score >= MIN_SCORE and abs(parsed.value - number["value"]) < 1e-9
+            right += bool(parsed) and rec.score >= reader.min_score and abs(parsed.value - number["value"]) < 1e-9
         group = outcome[record["image"]] if outcome[record["image"]] in GROUPS else "other refusals"
         entry = counts[group]
         entry[0] += 1

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gauged.reader.ocr_engine import quad_height
 from gauged.types import StageFailure
 
 # Bins (px) of the median printed-number height of an image's main scale, for the breakdown table.
@@ -75,13 +76,11 @@ def _label(item: dict) -> Label:
 
 
 def _number_height(gauge: dict) -> float | None:
-    """Median height (px) of the printed numbers of a synthetic gauge's primary scale (the mean length
-    of each number quad's two sides across its reading direction), or None when not labelled."""
+    """Median height (px, :func:`gauged.reader.ocr_engine.quad_height`) of the printed numbers of a
+    synthetic gauge's primary scale, or None when not labelled."""
     scales = [s for s in gauge.get("scales", ()) if s.get("role") == "primary"]
-    quads = [np.asarray(n["quad"], float) for s in scales for n in s.get("numbers", ()) if n.get("quad")]
-    if not quads:
-        return None
-    return float(np.median([0.5 * (np.linalg.norm(q[3] - q[0]) + np.linalg.norm(q[2] - q[1])) for q in quads]))
+    heights = [quad_height(n["quad"]) for s in scales for n in s.get("numbers", ()) if n.get("quad")]
+    return float(np.median(heights)) if heights else None
 
 
 def image_path(folder: Path, label: Label) -> Path:

@@ -43,17 +43,17 @@ _RANK_TOLERANCE = 1e-9
 Shape = Literal["ellipse", "circle", "auto"]
 
 
-def _normalize(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """Centre points (N, 2) on their mean and scale to unit RMS radius; returns (normalised, mean, scale)."""
-    mean = points.mean(axis=0)
-    centred = points - mean
-    scale = float(np.sqrt(np.mean(np.sum(centred * centred, axis=1))))
-    if scale == 0.0:
-        scale = 1.0  # all points identical: the rank test below reports it
-    return centred / scale, mean, scale
+def _normalize(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centre point sets (..., N, 2) on their means and scale each to unit RMS radius; returns
+    (normalised, mean (..., 2), scale (...))."""
+    mean = points.mean(axis=-2)
+    centred = points - mean[..., None, :]
+    scale = np.sqrt(np.mean(np.sum(centred * centred, axis=-1), axis=-1))
+    scale = np.where(scale == 0.0, 1.0, scale)  # all points identical: the rank test reports it
+    return centred / scale[..., None, None], mean, scale
 
 
-def _denormalize(ellipse: Ellipse, mean: np.ndarray, scale: float) -> Ellipse:
+def _denormalize(ellipse: Ellipse, mean: np.ndarray, scale: np.ndarray) -> Ellipse:
     return normalized_ellipse(
         ellipse.cx * scale + mean[0], ellipse.cy * scale + mean[1], ellipse.a * scale, ellipse.b * scale, ellipse.theta
     )
@@ -138,14 +138,10 @@ def fit_ellipses_direct(samples: np.ndarray) -> EllipseHypotheses:
     A sample is ``ok`` exactly when :func:`fit_ellipse_direct` would return an ellipse for it (the
     same rank, constraint and :func:`gauged.geometry.conic.conic_to_ellipse` tests, up to rounding).
     """
-    samples = np.asarray(samples, float)
-    mean = samples.mean(axis=1, keepdims=True)
-    centred = samples - mean
-    scale = np.sqrt(np.mean(np.sum(centred * centred, axis=2), axis=1))
-    scale = np.where(scale == 0.0, 1.0, scale)  # identical points: the rank test refuses them
-    conics, status = _direct_conics(centred / scale[:, None, None])
+    norm, mean, scale = _normalize(np.asarray(samples, float))
+    conics, status = _direct_conics(norm)
     centre, form, a, b, ok = conic_forms(conics)
-    return EllipseHypotheses(centre * scale[:, None] + mean[:, 0], form / (scale * scale)[:, None, None],
+    return EllipseHypotheses(centre * scale[:, None] + mean, form / (scale * scale)[:, None, None],
                              a * scale, b * scale, ok & (status == 0))
 
 

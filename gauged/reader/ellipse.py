@@ -188,10 +188,10 @@ def _robust_fit(points: np.ndarray, tol_px: float, trials: int = 300) -> tuple[E
     rng = np.random.default_rng(0)
     best_keep, best_cost, needed = None, np.inf, trials
     trial = 0
-    while trial < min(trials, max(MIN_TRIALS, needed)):
+    while trial < (stop := min(trials, max(MIN_TRIALS, needed))):
         # The samples up to the current stopping count are drawn and scored in one batch, then taken
         # in order: the same search, sample for sample, as one hypothesis at a time.
-        subsets = [rng.choice(count, sample, replace=False) for _ in range(trial, min(trials, max(MIN_TRIALS, needed)))]
+        subsets = [rng.choice(count, sample, replace=False) for _ in range(trial, stop)]
         dists, usable = _hypothesis_distances(points, points[np.array(subsets)])
         for dist, ok in zip(dists, usable, strict=True):
             if trial >= max(MIN_TRIALS, needed):
@@ -226,7 +226,7 @@ def _hypothesis_distances(points: np.ndarray, subsets: np.ndarray) -> tuple[np.n
         hypotheses = fit_ellipses_direct(subsets)
         usable = hypotheses.ok & (hypotheses.b >= 0.2 * hypotheses.a)
         radius = np.where(usable[:, None], hypotheses.normalized_radius(points), 1.0)
-        return np.abs(radius - 1.0) * np.sqrt(np.abs(hypotheses.a * hypotheses.b))[:, None], usable
+        return np.abs(radius - 1.0) * np.sqrt(hypotheses.a * hypotheses.b)[:, None], usable
     circles = [fit_circle(subset) for subset in subsets]  # 4-5 notches only: a handful of samples
     usable = np.array([not isinstance(c, StageFailure) for c in circles])
     dists = np.array([np.abs(normalized_radius(c, points) - 1.0) * c.a if ok else np.zeros(len(points))

@@ -109,15 +109,21 @@ class TextBox:
 
     @property
     def height(self) -> float:
-        """Text height: mean length of the quad's two sides across the reading direction."""
-        q = np.asarray(self.quad, float)
-        return float(0.5 * (np.linalg.norm(q[3] - q[0]) + np.linalg.norm(q[2] - q[1])))
+        """Text height: :func:`quad_height` of the quad."""
+        return quad_height(self.quad)
 
     @property
     def width(self) -> float:
         """Text length along the reading direction."""
         q = np.asarray(self.quad, float)
         return float(0.5 * (np.linalg.norm(q[1] - q[0]) + np.linalg.norm(q[2] - q[3])))
+
+
+def quad_height(quad: np.ndarray) -> float:
+    """Height of a text quad (4, 2) ordered as :class:`TextBox` quads are: the mean length of its two
+    sides across the reading direction."""
+    q = np.asarray(quad, float)
+    return float(0.5 * (np.linalg.norm(q[3] - q[0]) + np.linalg.norm(q[2] - q[1])))
 
 
 def find_model_files(package: str = DEFAULT_MODEL_PACKAGE) -> tuple[Path, Path]:

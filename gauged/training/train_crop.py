@@ -215,6 +215,7 @@ def main(argv: list[str] | None = None) -> int:
             [augmented(shards[0].sample(i), args.size, None, 0.0)[0] for i in range(min(48, len(shards[0])))]))))
     if args.needle_branch and not init_has_branch:
         model.add_needle_branch()
+    if args.needle_branch:
         model.to(memory_format=torch.channels_last)
         log.info("needle branch: %d trainable parameters, the rest frozen",
                  sum(p.numel() for p in model.parameters() if p.requires_grad))
