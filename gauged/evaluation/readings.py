@@ -6,8 +6,10 @@ error of an image is ``|pred - reading| / (max - min)``. A refused image counts 
 are averaged over attempted images, and over all images with a failure counted as 100%. Images whose
 true reading sits at a scale end (needle at rest) are reported separately, so a reader that always
 answers "minimum" cannot look good. Synthetic records (``gauged synth images``) also carry the printed
-numbers' boxes: the table then breaks the images down by the height of the main scale's numbers in
-the image (:data:`NUMBER_HEIGHTS`), which is where most OCR refusals come from.
+numbers' boxes: the table then breaks the images down by the height of the main scale's numbers as
+the camera captured them (:data:`NUMBER_HEIGHTS`; the height in the image times the record's
+``render_scale``, so a far gauge's crop upsampled 4x counts at its captured size), which is where
+most OCR refusals come from.
 """
 
 from __future__ import annotations
@@ -23,8 +25,9 @@ import numpy as np
 from gauged.reader.ocr_engine import quad_height
 from gauged.types import StageFailure
 
-# Bins (px) of the median printed-number height of an image's main scale, for the breakdown table.
-NUMBER_HEIGHTS = ((0.0, 10.0), (10.0, 14.0), (14.0, 18.0), (18.0, float("inf")))
+# Bins (px) of the median printed-number height of an image's main scale as captured, for the
+# breakdown table. Below about 5 px no reader resolves a digit (docs/accuracy.md).
+NUMBER_HEIGHTS = ((0.0, 5.0), (5.0, 10.0), (10.0, 14.0), (14.0, 18.0), (18.0, float("inf")))
 
 
 @dataclass(frozen=True)
@@ -34,6 +37,12 @@ class Label:
     min: float
     max: float
     number_px: float | None = None  # median height (px) of the main scale's printed numbers, when labelled
+    render_scale: float = 1.0  # the share of the image's resolution that was captured (synthetic records)
+
+    @property
+    def captured_number_px(self) -> float | None:
+        """The numbers' height as the camera captured them: in the image, times ``render_scale``."""
+        return None if self.number_px is None else self.number_px * self.render_scale
 
     @property
     def at_rest(self) -> bool:
@@ -72,7 +81,7 @@ def _label(item: dict) -> Label:
         return Label(str(item["image"]), float(item["reading"]), float(item["min"]), float(item["max"]))
     gauge = max(item["gauges"], key=lambda g: (g["box"][2] - g["box"][0]) * (g["box"][3] - g["box"][1]))
     return Label(str(item["image"]), float(gauge["value"]), float(gauge["min"]), float(gauge["max"]),
-                 _number_height(gauge))
+                 _number_height(gauge), float(item.get("render_scale", 1.0)))
 
 
 def _number_height(gauge: dict) -> float | None:
@@ -133,19 +142,20 @@ def _height_bin(low: float, high: float) -> str:
 
 def report(outcomes: list[Outcome]) -> dict:
     """The whole table: all images, the needle-at-rest subset and the rest, and (when the labels
-    carry number boxes) the images by printed-number height."""
+    carry number boxes) the images by printed-number height as captured."""
     result = {
         "all": summarize(outcomes).to_dict(),
         "needle_at_rest": summarize([o for o in outcomes if o.label.at_rest]).to_dict(),
         "needle_off_rest": summarize([o for o in outcomes if not o.label.at_rest]).to_dict(),
         "images": [{"image": o.label.image, "truth": o.label.reading, "value": o.value,
                     "relative_error": o.relative_error, "number_px": o.label.number_px,
+                    "captured_number_px": o.label.captured_number_px,
                     "failure": None if o.failure is None else o.failure.to_dict()} for o in outcomes],
     }
     if any(o.label.number_px is not None for o in outcomes):
         result["by_number_height"] = {
             _height_bin(low, high): summarize([o for o in outcomes if o.label.number_px is not None
-                                               and low <= o.label.number_px < high]).to_dict()
+                                               and low <= o.label.captured_number_px < high]).to_dict()
             for low, high in NUMBER_HEIGHTS}
     return result
 

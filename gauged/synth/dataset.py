@@ -34,7 +34,8 @@ def render_item(args: tuple[str, int, int, int, int, int, bool]) -> tuple[np.nda
     rng = sample_rng(seed, index)
     if kind == "crop":
         crop = render_crop(rng, size, clean=clean)
-        return crop.image, image_record([], size, size) | {"gauges": [crop.truth]}, crop.needle_mask
+        record = image_record([], size, size, render_scale=1.0 / crop.output_scale)
+        return crop.image, record | {"gauges": [crop.truth]}, crop.needle_mask
     scene = render_scene(rng, width, height, clean=clean)
     return scene.image, scene.record, None
 

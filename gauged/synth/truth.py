@@ -10,7 +10,12 @@ image angles in radians (``atan2(dy, dx)``, positive = clockwise on screen). Flo
 Image record::
 
     {"image": "000123.jpg" | null, "width": W, "height": H, "stamp_ns": int | null,
-     "camera": str | null, "gauges": [Gauge, ...]}
+     "camera": str | null, "render_scale": float, "gauges": [Gauge, ...]}
+
+``render_scale`` is the share of the image's resolution the camera captured: 1.0, or for a crop
+rendered small and upsampled (a far gauge) its render size over its output size (0.12-0.6). A
+number 10 px tall in an image of render scale 0.25 was captured 2.5 px tall: that, not its size in
+the image, is what any reader can resolve.
 
 Gauge::
 
@@ -178,7 +183,7 @@ def gauge_truth(params: GaugeParams, texts: tuple[PlacedText, ...], needle: Need
 
 
 def image_record(gauges: list[GaugeTruth], width: int, height: int, *, image: str | None = None,
-                 stamp_ns: int | None = None, camera: str | None = None) -> dict[str, Any]:
+                 stamp_ns: int | None = None, camera: str | None = None, render_scale: float = 1.0) -> dict[str, Any]:
     """The per-image record of the schema above."""
     return {"image": image, "width": width, "height": height, "stamp_ns": stamp_ns, "camera": camera,
-            "gauges": [g.to_dict() for g in gauges]}
+            "render_scale": round(float(render_scale), 4), "gauges": [g.to_dict() for g in gauges]}

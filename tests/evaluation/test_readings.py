@@ -35,23 +35,30 @@ def test_load_labels_on_the_real_dev_set(shared_datasets):
     assert len(labels) == 21 and all(l.max > l.min for l in labels)
 
 
-def _synth_record(image: str, number_height: float) -> dict:
+def _synth_record(image: str, number_height: float, render_scale: float | None = None) -> dict:
     quads = [[[x, 50.0], [x + 20.0, 50.0], [x + 20.0, 50.0 + number_height], [x, 50.0 + number_height]] for x in (10.0, 40.0, 70.0)]
     scale = {"role": "primary", "numbers": [{"text": t, "quad": q} for t, q in zip("012", quads)]}
-    return {"image": image, "gauges": [{"box": [0, 0, 100, 100], "value": 1.0, "min": 0.0, "max": 2.0, "scales": [scale]}]}
+    record = {"image": image, "gauges": [{"box": [0, 0, 100, 100], "value": 1.0, "min": 0.0, "max": 2.0, "scales": [scale]}]}
+    return record if render_scale is None else record | {"render_scale": render_scale}
 
 
 def test_synthetic_labels_break_the_table_down_by_printed_number_height(tmp_path):
-    records = [_synth_record("small.jpg", 8.0), _synth_record("mid.jpg", 12.0), _synth_record("large.jpg", 30.0)]
+    # "far" is 16 px tall in the image but was rendered at a quarter and upsampled: captured 4 px tall
+    records = [_synth_record("small.jpg", 8.0), _synth_record("mid.jpg", 12.0), _synth_record("large.jpg", 30.0, 1.0),
+               _synth_record("far.jpg", 16.0, 0.25)]
     (tmp_path / "labels.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
     labels = load_labels(tmp_path)
-    assert [l.number_px for l in labels] == [8.0, 12.0, 30.0]
-    answers = {"small.jpg": (None, StageFailure("ocr", "no_text")), "mid.jpg": (1.1, None), "large.jpg": (1.0, None)}
+    assert [l.number_px for l in labels] == [8.0, 12.0, 30.0, 16.0]
+    assert [l.captured_number_px for l in labels] == [8.0, 12.0, 30.0, 4.0]
+    answers = {"small.jpg": (None, StageFailure("ocr", "no_text")), "mid.jpg": (1.1, None), "large.jpg": (1.0, None),
+               "far.jpg": (None, StageFailure("ocr", "no_text"))}
     result = report(evaluate(labels, lambda label: answers[label.image]))
     bins = result["by_number_height"]
-    assert bins["numbers 0-10 px"]["count"] == 1 and bins["numbers 0-10 px"]["failures"] == 1
+    assert bins["numbers 0-5 px"]["count"] == 1 and bins["numbers 0-5 px"]["failures"] == 1
+    assert bins["numbers 5-10 px"]["count"] == 1 and bins["numbers 5-10 px"]["failures"] == 1
     assert bins["numbers 10-14 px"]["count"] == 1 and math.isclose(bins["numbers 10-14 px"]["mean_relative_error"], 0.05)
     assert bins["numbers 14-18 px"]["count"] == 0 and bins["numbers >= 18 px"]["failures"] == 0
+    assert [i["captured_number_px"] for i in result["images"]] == [8.0, 12.0, 30.0, 4.0]
     assert "numbers >= 18 px" in format_table(result)
     # the real dev format has no number boxes: no breakdown
     assert "by_number_height" not in report(evaluate([Label("x.jpg", 1.0, 0.0, 2.0)], lambda label: (1.0, None)))

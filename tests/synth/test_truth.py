@@ -147,3 +147,14 @@ def test_truth_scale_points_lie_on_scale_ellipse() -> None:
                 dx, dy = major["point"][0] - e["cx"], major["point"][1] - e["cy"]
                 u, v = (dx * c + dy * s) / e["a"], (-dx * s + dy * c) / e["b"]
                 assert abs(u * u + v * v - 1.0) < 0.01
+
+
+def test_crop_records_say_at_what_share_of_their_resolution_they_were_captured() -> None:
+    from gauged.synth.dataset import render_item
+
+    # seed 3: sample 0 is rendered at 24 px and upsampled to 64, sample 4 at its full size
+    far = render_item(("crop", 3, 0, 0, 0, 64, False))[1]
+    near = render_item(("crop", 3, 4, 0, 0, 64, False))[1]
+    assert math.isclose(far["render_scale"], 24 / 64, abs_tol=1e-4)
+    assert near["render_scale"] == 1.0
+    assert render_item(("scene", 3, 0, 160, 120, 64, False))[1]["render_scale"] == 1.0
