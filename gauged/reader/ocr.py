@@ -40,10 +40,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gauged.geometry.angles import wrap_to_pi
+from gauged.geometry.angles import unwrap, wrap_to_pi
 from gauged.geometry.dial_frame import dial_angle
 from gauged.geometry.rectify import rectifying_homography, unrectify_points, warp_rectified
 from gauged.reader.ellipse import ScaleArc
+from gauged.reader.likely_scale import RingText, likely_markers
 from gauged.reader.numbers import filter_progression, merge_fragments, parse_number
 from gauged.reader.ocr_engine import DEFAULT_MODEL_PACKAGE, OcrEngine, TextBox, crop_quad
 from gauged.reader.ocr_regions import RING, ink_box, polar_strip
@@ -51,7 +52,8 @@ from gauged.reader.units import match_unit, read_unit
 from gauged.types import ScaleMarker, StageFailure
 
 STAGE = "ocr"
-REASONS = ("no_text", "no_numbers")
+NO_TEXT, NO_NUMBERS = "no_text", "no_numbers"
+REASONS = (NO_TEXT, NO_NUMBERS)
 RECTIFIED_SIZE = 512  # px; larger (the crop's own scale) or a larger detector input measured no better
 RECTIFIED_RADIUS = 0.34  # of RECTIFIED_SIZE: leaves room for numbers printed outside the scale
 TURNED_MIN_SCORE = 0.9  # a reading found only after turning the text must be this confident
@@ -287,15 +289,7 @@ class ScaleTextReader:
                    down: float) -> _View:
         """The texts of the dial rectified with dial angle ``down`` at the bottom (the quick pass,
         then the full pass if that is not enough)."""
-        size = RECTIFIED_SIZE
-        radius = RECTIFIED_RADIUS * size
-        matrix = rectifying_homography(arc.ellipse, down, size, radius=radius, centre=arc.centre)
-        if detail is None:
-            rectified = warp_rectified(crop, matrix, size)
-        else:  # detail px -> crop px is a pure scaling of the same square
-            to_crop = np.diag([crop.shape[1] / detail.shape[1], crop.shape[0] / detail.shape[0], 1.0])
-            rectified = warp_rectified(detail, matrix @ to_crop, size)
-        circle = (size / 2.0, size / 2.0, radius)
+        rectified, matrix, circle = _rectified(crop, arc, detail, down)
         gap = float(wrap_to_pi(math.pi / 2 + arc.zero_angle - down))  # where the scale's gap lies in the view
         rhints = None
         if hints is not None and len(hints):
@@ -304,6 +298,53 @@ class ScaleTextReader:
         if texts is None:
             texts = self.read_dial(rectified, circle, rhints, known=quick, gap=gap)
         return _View(texts, matrix, circle, gap)
+
+    def _views(self, arc: ScaleArc) -> list[float]:
+        """The dial angles put at the bottom of the rectified views: the scale's gap, and the
+        image's down when that turns the view by more than :data:`UPRIGHT_TURN`."""
+        upright = _image_down(arc)
+        return [arc.zero_angle] + ([upright] if abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN else [])
+
+    def ring_texts(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
+                   ) -> list[list[RingText]]:
+        """Every text region where the main scale's numbers may lie (the ring :data:`RING` outside
+        :data:`INNER_SCALE`), per rectified view (:meth:`_views`), each read upright and turned
+        radially (top outward), whatever it reads: the regions the text detector finds there, and
+        the ink at each hint (crop px) that none of them holds. For
+        :func:`gauged.reader.likely_scale.likely_markers`; nothing is filtered by score or parse."""
+        views = []
+        for down in self._views(arc):
+            image, matrix, circle = _rectified(crop, arc, detail, down)
+            roi, x0, y0 = _square(image, circle[0], circle[1], RING[1] * circle[2])
+            quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)] if roi.size else []
+            quads = [q for q in quads if _on_main_scale(tuple(q.mean(axis=0)), circle)]
+            if hints is not None and len(hints):
+                points = cv2.perspectiveTransform(np.asarray(hints, np.float64).reshape(-1, 1, 2), matrix).reshape(-1, 2)
+                loose = [tuple(p) for p in points if _on_main_scale(tuple(p), circle)
+                         and not any(cv2.pointPolygonTest(q.reshape(-1, 1, 2), (float(p[0]), float(p[1])), False) >= 0 for q in quads)]
+                quads += _ink_quads(image, loose, circle[2])
+            turns = [(q, 0, _radial_turn(q, circle)) for q in quads]
+            lines = [crop_quad(image, _turned(q, k)) for q, up, radial in turns for k in (up, radial)]
+            readings = self.engine.recognize(lines)
+            texts = []
+            for n, (quad, _, _) in enumerate(turns):
+                centre = unrectify_points(matrix, quad.mean(axis=0, keepdims=True).astype(float))
+                corners = unrectify_points(matrix, quad.astype(float))
+                (cx, cy), (hw, hh) = centre[0], np.ptp(corners, axis=0) / 2
+                angle = float(unwrap(float(dial_angle(arc.ellipse, centre, arc.centre)[0]), arc.zero_angle))
+                radius = math.dist(quad.mean(axis=0), circle[:2]) / circle[2]
+                texts.append(RingText((float(cx - hw), float(cy - hh), float(cx + hw), float(cy + hh)), angle, radius,
+                                      {"upright": readings[2 * n], "radial": readings[2 * n + 1]}))
+            views.append(texts)
+        return views
+
+    def reread_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
+                       ) -> list[ScaleMarker] | None:
+        """A second look at a dial whose markers gave no scale: the markers of the number grid its
+        ring texts most likely print (:func:`gauged.reader.likely_scale.likely_markers`), or None."""
+        views = self.ring_texts(crop, arc, hints, detail)
+        start, end = unwrap(arc.start_angle, arc.zero_angle), unwrap(arc.end_angle, arc.zero_angle)
+        return likely_markers(views, float(start), float(end), self.engine.log_likelihood)
 
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
                      ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
@@ -318,21 +359,21 @@ class ScaleTextReader:
         ``no_numbers``.
         """
         self.engine.forget()  # the memo serves this dial's passes only
-        view = self._read_view(crop, arc, hints, detail, arc.zero_angle)
-        upright = _image_down(arc)
-        if abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN:  # the cheap test first
+        downs = self._views(arc)
+        view = self._read_view(crop, arc, hints, detail, downs[0])
+        if len(downs) > 1:  # the cheap test first
             agreeing = view.agreeing()
             if agreeing < UPRIGHT_BELOW:
-                other = self._read_view(crop, arc, hints, detail, upright)
+                other = self._read_view(crop, arc, hints, detail, downs[1])
                 if other.agreeing() > agreeing:
                     view = other
         texts, circle, matrix = view.texts, view.circle, view.matrix
         if not texts:
-            return StageFailure(STAGE, "no_text", "no text found on the rectified dial")
+            return StageFailure(STAGE, NO_TEXT, "no text found on the rectified dial")
         unit = read_unit(texts, circle)
         markers = scale_markers(texts, circle)
         if not markers:
-            return StageFailure(STAGE, "no_numbers", f"{len(texts)} text(s) read, none a scale number: "
+            return StageFailure(STAGE, NO_NUMBERS, f"{len(texts)} text(s) read, none a scale number: "
                                 + ", ".join(repr(t.text) for t in texts[:6]))
         # Ends inferred from a notch gap may lie inside a full-circle scale, whose numbers then run on
         # across the gap: unwrapped from it they look off the progression (a real dial indicator lost
@@ -368,6 +409,30 @@ class _View:
     def agreeing(self) -> int:
         """How many of the numbers read form the best arithmetic progression."""
         return _progression_size(self.texts, self.circle, self.gap)
+
+
+def _rectified(crop: np.ndarray, arc: ScaleArc, detail: np.ndarray | None, down: float
+               ) -> tuple[np.ndarray, np.ndarray, Circle]:
+    """The dial rectified with dial angle ``down`` at the bottom: the view, the homography crop px ->
+    view px, and the scale circle in the view. Sampled from ``detail`` (the crop's square at a higher
+    resolution) when given."""
+    size = RECTIFIED_SIZE
+    radius = RECTIFIED_RADIUS * size
+    matrix = rectifying_homography(arc.ellipse, down, size, radius=radius, centre=arc.centre)
+    if detail is None:
+        rectified = warp_rectified(crop, matrix, size)
+    else:  # detail px -> crop px is a pure scaling of the same square
+        to_crop = np.diag([crop.shape[1] / detail.shape[1], crop.shape[0] / detail.shape[0], 1.0])
+        rectified = warp_rectified(detail, matrix @ to_crop, size)
+    return rectified, matrix, (size / 2.0, size / 2.0, radius)
+
+
+def _radial_turn(quad: np.ndarray, circle: Circle) -> int:
+    """The quarter turn (:func:`_turned`) that puts the top of the quad's text outward from the circle's
+    centre, as radially printed numbers stand."""
+    outward = np.asarray(quad, float).mean(axis=0) - np.asarray(circle[:2])
+    outward /= max(float(np.linalg.norm(outward)), 1e-9)
+    return max(range(4), key=lambda k: float(_up(_turned(quad, k)) @ outward))
 
 
 def _image_down(arc: ScaleArc) -> float:
@@ -472,6 +537,11 @@ def _ring_texts(boxes: Sequence[TextBox], circle: Circle) -> list[TextBox]:
 def _main_scale(box: TextBox, circle: Circle) -> bool:
     """Whether a text sits where the main scale's numbers do, not deep inside (:data:`INNER_SCALE`)."""
     return math.dist(box.center, circle[:2]) >= INNER_SCALE * circle[2]
+
+
+def _on_main_scale(p: tuple[float, float], circle: Circle) -> bool:
+    """In the ring :data:`RING` but not deep inside it, where a secondary scale's numbers are."""
+    return _in_ring(p, circle) and math.dist(p, circle[:2]) >= INNER_SCALE * circle[2]
 
 
 def _in_ring(p: tuple[float, float], circle: Circle) -> bool:

@@ -15,7 +15,8 @@ CJK glyphs at no cost.
 
 References: Liao et al., "Real-time Scene Text Detection with Differentiable Binarization", AAAI
 2020 (post-processing: threshold, minimum-area rectangle, unclip by ``area * ratio / perimeter``);
-Graves et al., "Connectionist Temporal Classification", ICML 2006 (greedy decoding).
+Graves et al., "Connectionist Temporal Classification", ICML 2006 (greedy decoding, and the
+forward algorithm that scores a given string: :func:`ctc_log_likelihood`).
 """
 
 from __future__ import annotations
@@ -75,13 +76,17 @@ class Recognition:
 
     ``text``/``score`` decode with :data:`TEXT_CHARS`; ``digits``/``digits_score`` decode the same
     network output restricted to :data:`NUMBER_CHARS`. Scores are the mean probability of the kept
-    characters (0 for an empty string).
+    characters (0 for an empty string). ``digit_logp`` (T, K) is that restricted output as
+    log-probabilities over the line's own columns (class 0 the CTC blank, then
+    :attr:`OcrEngine.digit_chars`), for scoring strings other than the best one
+    (:meth:`OcrEngine.log_likelihood`); None where a reading was not made by the network.
     """
 
     text: str
     score: float
     digits: str
     digits_score: float
+    digit_logp: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -227,6 +232,8 @@ class OcrEngine:
         self._chars = ["", *meta["character"].splitlines(), " "]
         self._text_idx = self._class_subset(TEXT_CHARS)
         self._digit_idx = self._class_subset(NUMBER_CHARS)
+        self.digit_chars = tuple(self._chars[i] for i in self._digit_idx[1:])
+        self._digit_label = {c: k for k, c in enumerate(self.digit_chars, start=1)}
         self.memo_size = memo
         self._local = threading.local()
 
@@ -300,11 +307,23 @@ class OcrEngine:
                 line = cv2.resize(lines[i], (rw, REC_HEIGHT), interpolation=cv2.INTER_LINEAR)
                 batch[k, :, :, :rw] = _normalise(line)
             probs = self._rec.run(None, {self._rec.get_inputs()[0].name: batch})[0]
-            for k, i in enumerate(idx):
+            for k, (i, rw) in enumerate(zip(idx, widths)):
                 text, score = ctc_greedy(probs[k], self._text_idx, self._chars)
                 digits, dscore = ctc_greedy(probs[k], self._digit_idx, self._chars)
-                out[i] = Recognition(text.strip(), score, digits, dscore)
+                # The columns of the line itself (the rest of the batch's width is padding).
+                columns = max(1, math.ceil(probs.shape[1] * rw / batch_w))
+                sub = probs[k, :columns][:, self._digit_idx].astype(np.float64)
+                logp = np.log(np.clip(sub / np.maximum(sub.sum(axis=1, keepdims=True), 1e-12), 1e-9, 1.0))
+                out[i] = Recognition(text.strip(), score, digits, dscore, logp.astype(np.float32))
         return [r for r in out if r is not None]
+
+    def log_likelihood(self, recognition: Recognition, text: str) -> float:
+        """log P(``text`` | the line) under the recogniser restricted to :data:`NUMBER_CHARS`, summed
+        over every CTC alignment; ``-inf`` for a character outside that set or no network output."""
+        labels = [self._digit_label.get(c) for c in text]
+        if recognition.digit_logp is None or any(label is None for label in labels):
+            return -math.inf
+        return ctc_log_likelihood(recognition.digit_logp, labels)
 
 
 def _line_key(line: np.ndarray) -> tuple:
@@ -324,6 +343,33 @@ def ctc_greedy(probs: np.ndarray, classes: np.ndarray, chars: Sequence[str]) -> 
         return "", 0.0
     cls = classes[best[keep]]
     return "".join(chars[c] for c in cls), float(sub[np.nonzero(keep)[0], best[keep]].mean())
+
+
+def ctc_log_likelihood(logp: np.ndarray, labels: Sequence[int]) -> float:
+    """log P(``labels`` | ``logp``) by the CTC forward algorithm (Graves et al. 2006, Sec. 4.1).
+
+    ``logp`` (T, K) are per-column log-probabilities with class 0 the blank; ``labels`` the string's
+    class indices (1..K-1). ``-inf`` when the string needs more columns than there are.
+
+    >>> lp = np.log(np.array([[0.1, 0.9, 0.0], [0.9, 0.1, 0.0], [0.1, 0.0, 0.9]]) + 1e-12)
+    >>> round(math.exp(ctc_log_likelihood(lp, [1, 2])), 3)  # "ab" as a-a-b, a-blank-b or blank-a-b
+    0.819
+    """
+    columns = logp.shape[0]
+    ext = np.zeros(2 * len(labels) + 1, np.int64)  # blank, l1, blank, l2, ..., blank
+    ext[1::2] = labels
+    if not labels:
+        return float(logp[:, 0].sum())
+    # a label may be reached from two states back unless it repeats the label there
+    skip = np.zeros(len(ext), bool)
+    skip[3::2] = ext[3::2] != ext[1:-2:2]
+    alpha = np.full(len(ext), -np.inf)
+    alpha[:2] = logp[0, ext[:2]]
+    for t in range(1, columns):
+        step = np.logaddexp(alpha, np.concatenate(([-np.inf], alpha[:-1])))
+        step[skip] = np.logaddexp(step[skip], alpha[np.flatnonzero(skip) - 2])
+        alpha = step + logp[t, ext]
+    return float(np.logaddexp(alpha[-1], alpha[-2]))
 
 
 def db_boxes(

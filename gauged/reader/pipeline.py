@@ -21,6 +21,7 @@ from gauged.reader.ellipse import ScaleArc, fit_scale_arc
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
 from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
 from gauged.reader.needle import NeedleReading, fit_needle
+from gauged.reader.ocr import NO_NUMBERS
 from gauged.reader.onnx_model import OnnxModel, to_model_input
 from gauged.reader.reading import Value, read_value
 from gauged.reader.scale import fit_scales, scale_from_prior
@@ -31,6 +32,7 @@ DETAIL_SIZE = 640  # px: the largest square the OCR samples its rectified view f
 DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much more detail than the crop
 NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
+SECOND_LOOK = ("ocr", "scale")  # refusals of these stages (ocr: only no_numbers) get ScaleTextReader.reread_markers
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
 PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a close-up), read again
 
@@ -53,6 +55,10 @@ class ScaleTextReader(Protocol):
                      ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
         """Scale numbers (crop pixels, parsed values) and the unit, or a failure of stage ``ocr``.
         ``detail`` is the crop's region at a higher resolution, for the text to be read from."""
+
+    def reread_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
+                       ) -> list[ScaleMarker] | None:
+        """A second look after the scale stage refused ``read_markers``' numbers: other markers, or None."""
 
 
 @dataclass(frozen=True)
@@ -283,15 +289,28 @@ class GaugeReader:
             return [scale_from_prior(arc, known.min_value, known.max_value, known.unit)]
         if self.ocr is None:
             return StageFailure("ocr", OCR_UNAVAILABLE, "no OCR engine and no configured scale")
+        detail = self._detail(image, crop)
+        numbers = keypoints.numbers
+        hints = numbers.points[numbers.scores >= NUMBER_SURE]
         with timer("ocr"):
-            read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points, self._detail(image, crop))
-        if isinstance(read, StageFailure):
+            read = self.ocr.read_markers(crop.image, arc, numbers.points, detail)
+        if isinstance(read, StageFailure) and read.reason != NO_NUMBERS:
             return read
-        markers, unit = read
+        markers, unit = ([], None) if isinstance(read, StageFailure) else read
         result.markers, result.unit = markers, unit
         with timer("scale"):
-            numbers = keypoints.numbers
-            scales = fit_scales(arc, markers, unit, hints=numbers.points[numbers.scores >= NUMBER_SURE])
+            scales = read if isinstance(read, StageFailure) else fit_scales(arc, markers, unit, hints=hints)
+        if isinstance(scales, StageFailure) and scales.stage in SECOND_LOOK:
+            # The numbers read gave no scale: look again for the grid the ring's texts most likely
+            # print (gauged.reader.likely_scale). Only refusals get this look, and the original
+            # refusal stands unless the scale stage accepts what it finds.
+            with timer("ocr"):
+                again = self.ocr.reread_markers(crop.image, arc, numbers.points, detail)
+            if again:
+                with timer("scale"):
+                    retry = fit_scales(arc, again, unit, hints=hints)
+                if not isinstance(retry, StageFailure):
+                    result.markers, scales = again, retry
         if isinstance(scales, StageFailure):
             return scales
         if primary_unit and len(scales) > 1:

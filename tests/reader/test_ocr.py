@@ -14,7 +14,7 @@ from gauged.geometry.dial_frame import dial_angle
 from gauged.geometry.ellipse_fit import fit_ellipse
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.numbers import merge_fragments, parse_number
-from gauged.reader.ocr_engine import (OcrEngine, OcrUnavailable, ctc_greedy, db_boxes, find_model_files,
+from gauged.reader.ocr_engine import (OcrEngine, OcrUnavailable, ctc_greedy, ctc_log_likelihood, db_boxes, find_model_files,
                                       order_quad)
 from gauged.reader.units import read_unit
 from gauged.types import Ellipse, StageFailure
@@ -287,6 +287,40 @@ def test_ctc_greedy_merges_repeats_drops_blanks_and_restricts_the_alphabet():
     text, score = ctc_greedy(probs, np.array([0, 1, 2, 3]), chars)
     assert text == "160" and score == pytest.approx((0.9 + 0.5 + 0.9) / 3)
     assert ctc_greedy(np.eye(6)[[0, 0]], np.arange(6), chars) == ("", 0.0)
+
+
+def _collapse(path):
+    """The string a CTC alignment spells: repeats merged, blanks (0) dropped."""
+    return [c for k, c in enumerate(path) if c and (k == 0 or c != path[k - 1])]
+
+
+def test_ctc_log_likelihood_sums_the_probability_of_every_alignment():
+    import itertools
+
+    rng = np.random.default_rng(4)
+    probs = rng.dirichlet(np.ones(3), size=5)  # 5 columns, blank + 2 characters
+    logp = np.log(probs)
+    for labels in ([1], [1, 2], [2, 2], [1, 2, 1], []):
+        brute = sum(np.prod([probs[t, c] for t, c in enumerate(path)])
+                    for path in itertools.product(range(3), repeat=5) if _collapse(path) == labels)
+        assert math.exp(ctc_log_likelihood(logp, labels)) == pytest.approx(brute, rel=1e-9)
+    # "11" needs a blank between its two characters: three columns at least
+    assert ctc_log_likelihood(logp[:2], [1, 1]) == -math.inf
+
+
+def test_engine_scores_strings_other_than_its_best_reading():
+    try:
+        engine = OcrEngine(threads=1)
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR engine not installed ({exc}); {INSTALL}")
+    line = np.full((48, 120, 3), 235, np.uint8)
+    cv2.putText(line, "-25", (14, 36), cv2.FONT_HERSHEY_SIMPLEX, 1.2, (20, 20, 20), 3, cv2.LINE_AA)
+    rec = engine.recognize([line])[0]
+    assert rec.digits == "-25" and rec.digit_logp.shape[1] == len(engine.digit_chars) + 1
+    best = engine.log_likelihood(rec, "-25")
+    assert best > math.log(0.5)  # the printed string is likely...
+    assert best > engine.log_likelihood(rec, "25") + 2 > engine.log_likelihood(rec, "-35") + 2  # ...and others are not
+    assert engine.log_likelihood(rec, "-2a") == -math.inf  # a letter is not a number character
 
 
 def test_db_boxes_finds_rotated_text_regions_and_scales_them():

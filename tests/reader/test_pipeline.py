@@ -91,3 +91,29 @@ def test_a_photo_the_dial_runs_past_is_read_again_with_a_margin():
     assert read.arc is not None, read.failure
     assert read.box == pytest.approx((-PHOTO_MARGIN * side, -PHOTO_MARGIN * side, (1 + PHOTO_MARGIN) * side,
                                       (1 + PHOTO_MARGIN) * side))
+
+
+def test_a_refused_scale_gets_a_second_look_at_its_ring_texts():
+    """A -1..0 dial (engine render 39 of seed 7,000,000) whose numbers lose their minus signs and
+    decimal points: the first reading has two consistent numbers and is refused; the second look
+    (gauged.reader.likely_scale) finds the grid in the recogniser's probabilities and reads it."""
+    from gauged.config.model import ReaderConfig
+    from gauged.reader.factory import build_reader
+    from gauged.reader.ocr_engine import OcrUnavailable
+    from gauged.synth.dataset import render_item
+
+    try:
+        reader = build_reader(ReaderConfig(threads=2))
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR engine not installed ({exc})")
+    image, record, _ = render_item(("crop", 7_000_000, 39, 0, 0, 448, False))
+    gauge = record["gauges"][0]
+    assert (gauge["min"], gauge["max"]) == (-1.0, 0.0)
+    (read,) = reader.read_image(image)
+    assert read.failure is None, read.failure
+    assert abs(read.value.value - gauge["value"]) <= 0.01 * (gauge["max"] - gauge["min"])
+    assert len(read.markers) >= 4 and all(m.value <= 0 for m in read.markers)
+    # the first reading alone is refused at the scale stage
+    reader.ocr.reread_markers = lambda *args, **kwargs: None
+    (first,) = reader.read_image(image)
+    assert first.value is None and first.failure.stage == "scale"
