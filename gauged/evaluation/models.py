@@ -78,27 +78,58 @@ def needle_metrics(crop: OnnxModel, root: Path) -> dict:
             "median_direction_error_deg": float(np.median(errors_arr))}
 
 
+def render_scale(source: str, size: int) -> float | None:
+    """The share of its resolution a shard crop was captured at (:mod:`gauged.synth.truth`,
+    ``render_scale``), recomputed from its seed for engine crops (``synth/<seed>``), else None."""
+    if not source.startswith("synth/"):
+        return None
+    from gauged.synth.crop import sample_crop_spec
+
+    _, upsampling = sample_crop_spec(np.random.default_rng(int(source.split("/")[1])), size)
+    return 1.0 / upsampling
+
+
+class _NotchCounts:
+    def __init__(self) -> None:
+        self.crops = self.matched = self.labelled = self.predicted = self.ends = self.ends_found = 0
+
+    def to_dict(self) -> dict:
+        return {"crops": self.crops, "notch_recall_4px_at_448": self.matched / max(1, self.labelled),
+                "unassigned_share": (self.predicted - self.matched) / max(1, self.predicted),
+                "start_end_found": self.ends_found / max(1, self.ends)}
+
+
 def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000) -> dict:
+    """Notch recall, unassigned share and ends found on a shard's crops; ``by_capture`` splits the
+    engine's crops into those captured at full size and those rendered small and upsampled (a third
+    of the engine's crops, at 12-60% of their size: far gauges, whose notches may not be resolved)."""
     from gauged.training.shards import open_crop_shard
 
     shard = open_crop_shard(shard_dir)
     size = crop.input_size
     tol = 4.0 * size / 448
-    matched = labelled = predicted = ends = ends_found = 0
+    groups = {"all": _NotchCounts(), "full size": _NotchCounts(), "upsampled": _NotchCounts()}
     for index in range(min(limit, len(shard))):
         sample = shard.sample(index)
+        captured = render_scale(sample.source, sample.image.shape[0])
+        counts = [groups["all"]] + ([] if captured is None else [groups["full size" if captured == 1.0 else "upsampled"]])
         image = sample.image if sample.image.shape[0] == size else cv2.resize(sample.image, (size, size))
         keypoints = decode_crop_maps(crop(to_model_input(image)), size, require_notches=False)
         match = match_points(keypoints.major.points, np.asarray(sample.points.get("major") or []).reshape(-1, 2), tol)
-        matched, labelled, predicted = matched + match.matched, labelled + match.labelled, predicted + match.predicted
+        found = []
         for name in ("start", "end"):
             truth = sample.points.get(name)
             if truth:
-                ends += 1
                 peaks = getattr(keypoints, name)
-                ends_found += int(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - truth[0]) <= tol)
-    return {"crops": min(limit, len(shard)), "notch_recall_4px_at_448": matched / max(1, labelled),
-            "unassigned_share": (predicted - matched) / max(1, predicted), "start_end_found": ends_found / max(1, ends)}
+                found.append(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - truth[0]) <= tol)
+        for c in counts:
+            c.crops += 1
+            c.matched, c.labelled, c.predicted = c.matched + match.matched, c.labelled + match.labelled, c.predicted + match.predicted
+            c.ends, c.ends_found = c.ends + len(found), c.ends_found + sum(found)
+    result = groups["all"].to_dict()
+    if groups["full size"].crops or groups["upsampled"].crops:
+        result["by_capture"] = {name: groups[name].to_dict() for name in ("full size", "upsampled")}
+    return result
 
 
 def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Path | None = None,
@@ -157,4 +188,7 @@ def format_models(result: dict) -> str:
         t = result["notches"]
         lines.append(f"notches on {t['crops']} synthetic crops: recall {t['notch_recall_4px_at_448']:.1%}, "
                      f"unassigned {t['unassigned_share']:.1%}, start/end found {t['start_end_found']:.1%}")
+        for name, g in t.get("by_capture", {}).items():
+            lines.append(f"  {g['crops']} crops captured {name}: recall {g['notch_recall_4px_at_448']:.1%}, "
+                         f"unassigned {g['unassigned_share']:.1%}, start/end found {g['start_end_found']:.1%}")
     return "\n".join(lines)

@@ -87,3 +87,22 @@ def test_eval_models_counts_every_shipped_onnx_file_within_15_mb(tmp_path):
     expected = sum(packaged_model_path(n).stat().st_size for n in result["files"]) / 2**20
     assert result["files_mb"] == round(expected, 2) and result["files_mb"] <= 15.0  # issue 4's limit
     assert OCR_DET_INT8_MODEL in format_models(result)
+
+
+def test_notch_metrics_split_the_crops_captured_small_from_those_at_full_size(tmp_path):
+    from gauged.evaluation.models import notch_metrics, render_scale
+    from gauged.synth.crop import render_crop
+    from gauged.training.prerender import _render_synth_one
+    from gauged.training.shards import write_crop_shard
+
+    # seeds 3-6 at 128 px: the engine renders seed 3 at 30 px and upsamples it, the others at full size
+    scales = {seed: 1.0 / render_crop(seed, 128, masks=False).output_scale for seed in range(3, 7)}
+    assert all(render_scale(f"synth/{seed}", 128) == pytest.approx(s) for seed, s in scales.items())
+    assert render_scale("real/needle-polygons/x.jpg", 128) is None
+    small = sum(s < 1.0 for s in scales.values())
+    assert 0 < small < len(scales)
+    write_crop_shard(tmp_path, (_render_synth_one((seed, 128)) for seed in scales), len(scales), 128)
+    result = notch_metrics(_model(CROP_MODEL), tmp_path)
+    parts = result["by_capture"]
+    assert (parts["upsampled"]["crops"], parts["full size"]["crops"]) == (small, len(scales) - small)
+    assert result["crops"] == len(scales)
