@@ -34,7 +34,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from gauged.reader.numbers import parse_number
+from gauged.reader.numbers import ParsedNumber, parse_number
 from gauged.reader.ocr_engine import Recognition
 from gauged.types import Box, ScaleMarker, StageFailure
 
@@ -85,7 +85,8 @@ def decimals(step: float) -> int:
 
 def spellings(value: float, places: int) -> tuple[list[str], list[str]]:
     """How a dial may print ``value`` at ``places`` decimals: (the signed spellings, the spellings of
-    a negative value that lost its minus sign). "0.5" is also ".5" and "0,5"; 0 is also "0"."""
+    a negative value that lost its minus sign). "0.5" is also ".5" and "0,5"; 0 is also "0". The
+    minus is "-" (the engine scores "−" as the same character)."""
     value = 0.0 if abs(value) < 1e-12 else value
     digits = f"{abs(value):.{places}f}"
     forms = {digits, digits.replace(".", ",")}
@@ -95,7 +96,7 @@ def spellings(value: float, places: int) -> tuple[list[str], list[str]]:
         forms |= {digits[1:], digits[1:].replace(".", ",")}
     if value >= 0.0:
         return sorted(forms), []
-    return sorted(sign + f for f in forms for sign in ("-", "−")), sorted(forms)
+    return sorted("-" + f for f in forms), sorted(forms)
 
 
 def _likelihood(candidate: _Candidate, value: float, places: int, score: Score) -> tuple[float, str, bool]:
@@ -110,7 +111,7 @@ def _likelihood(candidate: _Candidate, value: float, places: int, score: Score) 
     return candidate.cache[key]
 
 
-def _parsed(reading: Recognition):
+def _parsed(reading: Recognition) -> ParsedNumber | None:
     """The number a reading's best string gives, or None."""
     parsed = parse_number(reading.digits) if reading.digits else None
     return None if parsed is None or isinstance(parsed, StageFailure) or parsed.fragment else parsed

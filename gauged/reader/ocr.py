@@ -323,18 +323,17 @@ class ScaleTextReader:
                 loose = [tuple(p) for p in points if _on_main_scale(tuple(p), circle)
                          and not any(cv2.pointPolygonTest(q.reshape(-1, 1, 2), (float(p[0]), float(p[1])), False) >= 0 for q in quads)]
                 quads += _ink_quads(image, loose, circle[2])
-            turns = [(q, 0, _radial_turn(q, circle)) for q in quads]
-            lines = [crop_quad(image, _turned(q, k)) for q, up, radial in turns for k in (up, radial)]
+            # each region upright and turned radially (the same line twice when that is upright: read once)
+            lines = [crop_quad(image, _turned(q, k)) for q in quads for k in (0, _radial_turn(q, circle))]
             readings = self.engine.recognize(lines)
             texts = []
-            for n, (quad, _, _) in enumerate(turns):
-                centre = unrectify_points(matrix, quad.mean(axis=0, keepdims=True).astype(float))
-                corners = unrectify_points(matrix, quad.astype(float))
-                (cx, cy), (hw, hh) = centre[0], np.ptp(corners, axis=0) / 2
+            for n, quad in enumerate(quads):
+                (x0, y0), (x1, y1) = quad.min(axis=0), quad.max(axis=0)
+                box = _crop_box(matrix, (float(x0), float(y0), float(x1), float(y1)))
+                centre = np.array([[(box[0] + box[2]) / 2, (box[1] + box[3]) / 2]])
                 angle = float(unwrap(float(dial_angle(arc.ellipse, centre, arc.centre)[0]), arc.zero_angle))
                 radius = math.dist(quad.mean(axis=0), circle[:2]) / circle[2]
-                texts.append(RingText((float(cx - hw), float(cy - hh), float(cx + hw), float(cy + hh)), angle, radius,
-                                      {"upright": readings[2 * n], "radial": readings[2 * n + 1]}))
+                texts.append(RingText(box, angle, radius, {"upright": readings[2 * n], "radial": readings[2 * n + 1]}))
             views.append(texts)
         return views
 
@@ -386,13 +385,7 @@ class ScaleTextReader:
             height = float(np.median([m.box[3] - m.box[1] for m in kept]))
             markers = kept + [m for m in markers if m.box not in taken and m.value != round(m.value)
                               and m.box[3] - m.box[1] <= 1.5 * height]
-        out = []
-        for m in markers:  # back to crop pixels: the box keeps its size around the mapped centre
-            x0, y0, x1, y1 = m.box
-            corners = unrectify_points(matrix, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
-            (cx, cy), = unrectify_points(matrix, np.array([[(x0 + x1) / 2, (y0 + y1) / 2]]))
-            hw, hh = np.ptp(corners, axis=0) / 2
-            out.append(ScaleMarker(m.text, m.value, (cx - hw, cy - hh, cx + hw, cy + hh), None, None, m.score))
+        out = [ScaleMarker(m.text, m.value, _crop_box(matrix, m.box), None, None, m.score) for m in markers]
         return out, (unit.unit if unit else None)
 
 
@@ -425,6 +418,16 @@ def _rectified(crop: np.ndarray, arc: ScaleArc, detail: np.ndarray | None, down:
         to_crop = np.diag([crop.shape[1] / detail.shape[1], crop.shape[0] / detail.shape[0], 1.0])
         rectified = warp_rectified(detail, matrix @ to_crop, size)
     return rectified, matrix, (size / 2.0, size / 2.0, radius)
+
+
+def _crop_box(matrix: np.ndarray, box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """A box of the rectified view (``matrix``: crop px -> view px) in crop pixels: centred on its
+    mapped centre, as wide and high as its mapped corners spread."""
+    x0, y0, x1, y1 = box
+    corners = unrectify_points(matrix, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+    (cx, cy), = unrectify_points(matrix, np.array([[(x0 + x1) / 2, (y0 + y1) / 2]]))
+    hw, hh = np.ptp(corners, axis=0) / 2
+    return (float(cx - hw), float(cy - hh), float(cx + hw), float(cy + hh))
 
 
 def _radial_turn(quad: np.ndarray, circle: Circle) -> int:

@@ -266,6 +266,16 @@ def test_engine_reads_each_distinct_line_once_until_it_forgets():
     assert seen["first"] is not fresh  # the other thread's memo did not hold this thread's reading
     assert engine.recognize([lines[1]])[0] is fresh  # and its forget() did not empty this one
 
+    # Text detection is remembered the same way: the same image is detected once until forget()
+    page = np.full((96, 320, 3), 235, np.uint8)
+    cv2.putText(page, "160 bar", (20, 60), cv2.FONT_HERSHEY_SIMPLEX, 1.2, (20, 20, 20), 3, cv2.LINE_AA)
+    first = engine.detect(page, max_side=320)
+    assert first and engine.detect(page.copy(), max_side=320)[0] is first[0]
+    assert engine.detect(page, max_side=256)[0] is not first[0]  # other settings: detected again
+    engine.forget()
+    again = engine.detect(page, max_side=320)
+    assert again[0] is not first[0] and np.allclose(again[0].quad, first[0].quad)
+
 
 def test_find_model_files_names_missing_and_unknown_packages(monkeypatch):
     from gauged.reader import ocr_engine
