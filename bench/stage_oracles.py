@@ -133,7 +133,8 @@ def main() -> int:
     for line in (args.data / "labels.jsonl").read_text().splitlines():
         record = json.loads(line)
         if record.get("gauges"):
-            records[record["image"]] = max(record["gauges"], key=lambda g: g["diameter_px"])
+            # the gauge the labels are read for: the largest box, as gauged.evaluation.readings takes it
+            records[record["image"]] = max(record["gauges"], key=lambda g: (g["box"][2] - g["box"][0]) * (g["box"][3] - g["box"][1]))
     labels = [label for label in load_labels(args.data) if label.image in refused]
     print(f"{len(labels)} refused images of {args.data}")
     print("| truth given for | still refused | read | largest error of those read | main refusals left |")
