@@ -21,7 +21,8 @@ are clear, this looks for the grid that the texts most likely print:
 
 Two kinds of misreading make false grids, so neither is proposed: whole numbers on a ring where some
 text reads as a decimal number (their decimal points were lost: "0.5, 1.0, 1.5" read "5, 10, 15"),
-and negative numbers none of which shows its minus sign. The markers of the best grid then go
+and negative numbers none of which shows its minus sign (unless they end at 0, as a -30..0 scale whose
+minus signs all went unread does). The markers of the best grid then go
 through the scale stage's own checks (:func:`gauged.reader.scale.fit_scales`) like any others; a
 marker keeps its text's own string when that parses to its value ("0.0" stays "0.0", which those
 checks read). The pipeline takes this look only after
@@ -168,8 +169,8 @@ def _grid_markers(candidates: Sequence[_Candidate], first: tuple[int, float], se
         values = [a[1] for a in agreeing]
         if i not in indices or j not in indices or len(set(values)) < len(values):
             continue
-        if any(v < 0 for v in values) and not any(a[1] < 0 and a[4] for a in agreeing):
-            continue  # negative numbers, but not one minus sign seen
+        if any(v < 0 for v in values) and not any(a[1] < 0 and a[4] for a in agreeing) and max(values) != 0.0:
+            continue  # negative numbers, not one minus sign seen, and not a scale of negatives up to 0
         if len(agreeing) < AGREE_SHARE * on_places:
             continue
         key = (len(agreeing), sum(a[3] for a in agreeing))
