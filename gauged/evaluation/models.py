@@ -93,6 +93,15 @@ class _NotchCounts:
     def __init__(self) -> None:
         self.crops = self.matched = self.labelled = self.predicted = self.ends = self.ends_found = 0
 
+    def add(self, match, ends: list[bool]) -> None:
+        """One crop: its major-notch match and, per labelled end, whether it was found."""
+        self.crops += 1
+        self.matched += match.matched
+        self.labelled += match.labelled
+        self.predicted += match.predicted
+        self.ends += len(ends)
+        self.ends_found += sum(ends)
+
     def to_dict(self) -> dict:
         return {"crops": self.crops, "notch_recall_4px_at_448": self.matched / max(1, self.labelled),
                 "unassigned_share": (self.predicted - self.matched) / max(1, self.predicted),
@@ -122,10 +131,8 @@ def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000) -> dict:
             if truth:
                 peaks = getattr(keypoints, name)
                 found.append(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - truth[0]) <= tol)
-        for c in counts:
-            c.crops += 1
-            c.matched, c.labelled, c.predicted = c.matched + match.matched, c.labelled + match.labelled, c.predicted + match.predicted
-            c.ends, c.ends_found = c.ends + len(found), c.ends_found + sum(found)
+        for group in counts:
+            group.add(match, found)
     result = groups["all"].to_dict()
     if groups["full size"].crops or groups["upsampled"].crops:
         result["by_capture"] = {name: groups[name].to_dict() for name in ("full size", "upsampled")}

@@ -73,6 +73,7 @@ class _Candidate:
     text: RingText
     reading: Recognition
     best: float  # log-likelihood of the reading's own best number string
+    parsed: ParsedNumber | None  # the number that string gives
     cache: dict[tuple[float, int], tuple[float, str, bool]] = field(default_factory=dict)
 
 
@@ -122,11 +123,10 @@ def _anchors(candidates: Sequence[_Candidate]) -> list[tuple[int, float]]:
     """(candidate index, value) of every best string that parses, and of its negative."""
     out = set()
     for index, candidate in enumerate(candidates):
-        parsed = _parsed(candidate.reading)
-        if parsed is not None:
-            out.add((index, parsed.value))
-            if parsed.value > 0:
-                out.add((index, -parsed.value))
+        if candidate.parsed is not None:
+            out.add((index, candidate.parsed.value))
+            if candidate.parsed.value > 0:
+                out.add((index, -candidate.parsed.value))
     return sorted(out)
 
 
@@ -175,16 +175,16 @@ def _grid_markers(candidates: Sequence[_Candidate], first: tuple[int, float], se
             continue
         key = (len(agreeing), sum(a[3] for a in agreeing))
         if best is None or key > best[0]:
-            markers = [ScaleMarker(_own_text(candidates[k].reading, value, spelling), float(value), candidates[k].text.box)
+            markers = [ScaleMarker(_own_text(candidates[k], value, spelling), float(value), candidates[k].text.box)
                        for k, value, spelling, _, _ in agreeing]
             best = (key, markers)
     return best
 
 
-def _own_text(reading: Recognition, value: float, spelling: str) -> str:
+def _own_text(candidate: _Candidate, value: float, spelling: str) -> str:
     """The reading's own string when it parses to ``value``, else the grid's spelling of it."""
-    parsed = _parsed(reading)
-    return reading.digits if parsed is not None and abs(parsed.value - value) < 1e-9 else spelling
+    parsed = candidate.parsed
+    return candidate.reading.digits if parsed is not None and abs(parsed.value - value) < 1e-9 else spelling
 
 
 def likely_markers(views: Sequence[Sequence[RingText]], start: float, end: float, score: Score
@@ -203,9 +203,9 @@ def likely_markers(views: Sequence[Sequence[RingText]], start: float, end: float
                 reading = text.readings.get(orientation)
                 if reading is not None:
                     own = score(reading, reading.digits) if reading.digits else -math.inf
-                    candidates.append(_Candidate(text, reading, own))
+                    candidates.append(_Candidate(text, reading, own, _parsed(reading)))
             anchors = _anchors(candidates)
-            decimal_seen = any((parsed := _parsed(c.reading)) is not None and parsed.decimals > 0 for c in candidates)
+            decimal_seen = any(c.parsed is not None and c.parsed.decimals > 0 for c in candidates)
             for first in anchors:
                 for second in anchors:
                     if (first[0] == second[0] or second[1] <= first[1]

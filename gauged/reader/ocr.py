@@ -299,21 +299,15 @@ class ScaleTextReader:
             texts = self.read_dial(rectified, circle, rhints, known=quick, gap=gap)
         return _View(texts, matrix, circle, gap)
 
-    def _views(self, arc: ScaleArc) -> list[float]:
-        """The dial angles put at the bottom of the rectified views: the scale's gap, and the
-        image's down when that turns the view by more than :data:`UPRIGHT_TURN`."""
-        upright = _image_down(arc)
-        return [arc.zero_angle] + ([upright] if abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN else [])
-
     def ring_texts(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
                    ) -> list[list[RingText]]:
         """Every text region where the main scale's numbers may lie (the ring :data:`RING` outside
-        :data:`INNER_SCALE`), per rectified view (:meth:`_views`), each read upright and turned
+        :data:`INNER_SCALE`), per rectified view (:func:`_view_downs`), each read upright and turned
         radially (top outward), whatever it reads: the regions the text detector finds there, and
         the ink at each hint (crop px) that none of them holds. For
         :func:`gauged.reader.likely_scale.likely_markers`; nothing is filtered by score or parse."""
         views = []
-        for down in self._views(arc):
+        for down in _view_downs(arc):
             image, matrix, circle = _rectified(crop, arc, detail, down)
             roi, x0, y0 = _square(image, circle[0], circle[1], RING[1] * circle[2])
             quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)] if roi.size else []
@@ -358,7 +352,7 @@ class ScaleTextReader:
         ``no_numbers``.
         """
         self.engine.forget()  # the memo serves this dial's passes only
-        downs = self._views(arc)
+        downs = _view_downs(arc)
         view = self._read_view(crop, arc, hints, detail, downs[0])
         if len(downs) > 1:  # the cheap test first
             agreeing = view.agreeing()
@@ -402,6 +396,13 @@ class _View:
     def agreeing(self) -> int:
         """How many of the numbers read form the best arithmetic progression."""
         return _progression_size(self.texts, self.circle, self.gap)
+
+
+def _view_downs(arc: ScaleArc) -> list[float]:
+    """The dial angles put at the bottom of the rectified views: the scale's gap, and the image's
+    down when that turns the view by more than :data:`UPRIGHT_TURN`."""
+    upright = _image_down(arc)
+    return [arc.zero_angle] + ([upright] if abs(wrap_to_pi(upright - arc.zero_angle)) > UPRIGHT_TURN else [])
 
 
 def _rectified(crop: np.ndarray, arc: ScaleArc, detail: np.ndarray | None, down: float

@@ -294,12 +294,15 @@ class GaugeReader:
         hints = numbers.points[numbers.scores >= NUMBER_SURE]
         with timer("ocr"):
             read = self.ocr.read_markers(crop.image, arc, numbers.points, detail)
-        if isinstance(read, StageFailure) and read.reason != NO_NUMBERS:
-            return read
-        markers, unit = ([], None) if isinstance(read, StageFailure) else read
-        result.markers, result.unit = markers, unit
-        with timer("scale"):
-            scales = read if isinstance(read, StageFailure) else fit_scales(arc, markers, unit, hints=hints)
+        if isinstance(read, StageFailure):
+            if read.reason != NO_NUMBERS:
+                return read
+            unit, scales = None, read  # texts but no number: the second look below may find some
+        else:
+            result.markers, unit = read
+            with timer("scale"):
+                scales = fit_scales(arc, result.markers, unit, hints=hints)
+        result.unit = unit
         if isinstance(scales, StageFailure) and scales.stage in SECOND_LOOK:
             # The numbers read gave no scale: look again for the grid the ring's texts most likely
             # print (gauged.reader.likely_scale). Only refusals get this look, and the original
