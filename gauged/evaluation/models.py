@@ -3,9 +3,9 @@
 - Detector on ``substation-dials``: per frame, the best IoU between the labelled dial box and any
   detection; mean IoU and recall at IoU 0.5.
 - Crop model on ``needle-polygons/valid``: needle mask IoU at the photo's resolution (logits resized
-  bilinearly, cut at 0.5) and the
-  needle direction error (mask axis oriented away from the image centre, see
-  :func:`gauged.evaluation.model_metrics.mask_direction`).
+  bilinearly, cut at 0.5) and the needle direction error (mask axis oriented away from the image
+  centre, see :func:`gauged.evaluation.model_metrics.mask_direction`); once with each photo given
+  whole, once cut to its detected gauge as the reader does (:mod:`gauged.evaluation.gauge_crops`).
 - Crop model on a synthetic crop shard: major-notch recall and unassigned share within 4 px at
   448 px, start/end notch found.
 - Speed: median of 100 runs after 10 warm-up runs, at the configured thread count.
@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 
 from gauged.evaluation.timing import median_s
+from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame
 from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, OCR_DET_INT8_MODEL, model_path
@@ -59,22 +60,39 @@ def closeup_metrics(detector: GaugeDetector, folder: Path) -> dict:
     return {"images": len(records), **_box_ious(detector, [(folder / r["image"], r["gauges"][0]["box"]) for r in records])}
 
 
-def needle_metrics(crop: OnnxModel, root: Path) -> dict:
+def needle_metrics(crop: OnnxModel, root: Path, detector: GaugeDetector | None = None) -> dict:
+    """Needle mask IoU and direction on the ``valid`` photos, each given whole to the crop model and,
+    with a ``detector``, also cut to its detected gauge first as the reader does (``reader_crop``)."""
     from gauged.training.real_data import load_needle_split
 
     size = crop.input_size
-    ious, errors = [], []
-    for sample in load_needle_split(root, "valid"):
+    samples = load_needle_split(root, "valid")
+    result = _needle_scores(crop, samples, lambda image: None)
+    if detector is not None:
+        result["reader_crop"] = _needle_scores(crop, samples, lambda image: best_gauge_crop(detector, image, size))
+    return result
+
+
+def _needle_scores(crop: OnnxModel, samples, crop_of) -> dict:
+    size = crop.input_size
+    ious, errors, whole = [], [], 0
+    for sample in samples:
         image, mask = sample.load()
-        logits = crop(to_model_input(cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)))
-        pred = needle_mask_at(logits[-1], mask.shape)
+        gauge = crop_of(image)
+        if gauge is None:
+            whole += 1
+            logits = crop(to_model_input(cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)))
+            pred = needle_mask_at(logits[-1], mask.shape)
+        else:
+            pred = crop_logits_in_frame(crop(to_model_input(gauge.image))[-1], gauge, size, mask.shape) > 0
         truth = mask > 0
         ious.append(mask_iou(pred, truth))
         centre = (pred.shape[1] / 2, pred.shape[0] / 2)
         a, b = mask_direction(pred, centre), mask_direction(truth, centre)
         errors.append(180.0 if a is None or b is None else angle_error_deg(a, b))
     errors_arr = np.asarray(errors)
-    return {"photos": len(ious), "mean_mask_iou": float(np.mean(ious)), "direction_within_3deg": float((errors_arr <= 3).mean()),
+    return {"photos": len(ious), "whole_photos": whole, "mean_mask_iou": float(np.mean(ious)),
+            "direction_within_3deg": float((errors_arr <= 3).mean()),
             "median_direction_error_deg": float(np.median(errors_arr))}
 
 
@@ -166,7 +184,8 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
     else:
         result["detector"] = "missing: gauged/models/detector.onnx is not trained yet"
     if (data / "needle-polygons").is_dir():
-        result["needle"] = needle_metrics(crop, data / "needle-polygons")
+        result["needle"] = needle_metrics(crop, data / "needle-polygons",
+                                          GaugeDetector(detector_model) if detector_model is not None else None)
     if synth is not None:
         result["notches"] = notch_metrics(crop, synth)
     return result
@@ -189,8 +208,14 @@ def format_models(result: dict) -> str:
                      f"recall@0.5 {c['recall_iou50']:.1%}")
     if "needle" in result:
         n = result["needle"]
-        lines.append(f"needle on {n['photos']} real photos: mean mask IoU {n['mean_mask_iou']:.3f}, direction within "
+        lines.append(f"needle on {n['photos']} real photos, whole: mean mask IoU {n['mean_mask_iou']:.3f}, direction within "
                      f"3 deg {n['direction_within_3deg']:.1%} (median error {n['median_direction_error_deg']:.1f} deg)")
+        if "reader_crop" in n:
+            r = n["reader_crop"]
+            lines.append(f"needle on {r['photos']} real photos, cut to the detected gauge as the reader does "
+                         f"({r['whole_photos']} with no detection given whole): mean mask IoU {r['mean_mask_iou']:.3f}, "
+                         f"direction within 3 deg {r['direction_within_3deg']:.1%} "
+                         f"(median error {r['median_direction_error_deg']:.1f} deg)")
     if "notches" in result:
         t = result["notches"]
         lines.append(f"notches on {t['crops']} synthetic crops: recall {t['notch_recall_4px_at_448']:.1%}, "

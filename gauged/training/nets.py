@@ -106,17 +106,26 @@ class CropNet(nn.Module):
         self.register_buffer("mean", torch.tensor([0.498, 0.498, 0.498]).view(1, 3, 1, 1))
         self.register_buffer("std", torch.tensor([0.502, 0.502, 0.502]).view(1, 3, 1, 1))
         self.needle_branch: NeedleBranch | None = None
+        self.trunk_frozen = False
 
     def add_needle_branch(self) -> None:
         """Give the needle its own decoder, a copy of the shared one's up4/up2/head, and freeze the
         rest of the net (its BatchNorms stay in eval mode when training)."""
         self.needle_branch = NeedleBranch(self.up4, self.up2, self.head)
+        self.trunk_frozen = True
         for name, parameter in self.named_parameters():
             parameter.requires_grad = name.startswith("needle_branch.")
 
+    def unfreeze(self) -> None:
+        """Train every weight again (the trunk too): a net fine-tuned so is a needle model of its own,
+        since its keypoint maps drift from the file it started from."""
+        self.trunk_frozen = False
+        for parameter in self.parameters():
+            parameter.requires_grad = True
+
     def train(self, mode: bool = True) -> CropNet:
         super().train(mode)
-        if self.needle_branch is not None and mode:  # the frozen trunk keeps its statistics
+        if self.trunk_frozen and mode:  # the frozen trunk keeps its statistics
             for child in (self.encoder, self.up8, self.up4, self.up2, self.head):
                 child.eval()
         return self

@@ -14,20 +14,30 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from gauged.evaluation.gauge_crops import best_gauge_crop, crop_mask, shipped_detector
 from gauged.training.real_data import load_needle_split
 from gauged.training.shards import CropSample, DetectorSample, write_crop_shard, write_detector_shard
 
 log = logging.getLogger(__name__)
 
 
-def real_needle_samples(root: Path, split: str, size: int) -> Iterator[CropSample]:
-    """Needle-polygons photos resized to ``size``² with their needle masks; no keypoint labels."""
+def real_needle_samples(root: Path, split: str, size: int, detector=None) -> Iterator[CropSample]:
+    """Needle-polygons photos resized to ``size``² with their needle masks; no keypoint labels.
+
+    With a ``detector`` (:class:`gauged.reader.detect.GaugeDetector`) each photo is cut the reader's
+    way instead, to the square crop of its best gauge (:mod:`gauged.evaluation.gauge_crops`); a photo
+    where it finds no gauge is kept whole, as the reader would then have nothing to read.
+    """
     for sample in load_needle_split(root, split):
         image, mask = sample.load()
-        yield CropSample(cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA),
-                         {},  # keypoints are not labelled on these photos: masked out of the loss
-                         cv2.resize(mask, (size, size), interpolation=cv2.INTER_NEAREST),
-                         f"needle-polygons/{split}/{sample.image_path.name}")
+        crop = best_gauge_crop(detector, image, size) if detector is not None else None
+        name = f"needle-polygons/{split}/{sample.image_path.name}"
+        points: dict = {}  # keypoints are not labelled on these photos: masked out of the loss
+        if crop is None:
+            yield CropSample(cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA), points,
+                             cv2.resize(mask, (size, size), interpolation=cv2.INTER_NEAREST), name)
+        else:
+            yield CropSample(crop.image, points, crop_mask(mask, crop, size), name + "#gauge")
 
 
 def _render_one(args: tuple[int, int]) -> CropSample:
@@ -140,6 +150,8 @@ def main(argv: list[str] | None = None) -> int:
     needles.add_argument("--split", default="train")
     needles.add_argument("--size", type=int, default=256)
     needles.add_argument("--out", type=Path, required=True)
+    needles.add_argument("--crop-with-detector", action="store_true",
+                         help="cut each photo to its detected gauge, as the reader does (the shipped detector)")
     crops = sub.add_parser("crops", help="synthetic dial crops -> crop shard")
     crops.add_argument("--seed", type=int, default=0, help="first seed (held-out sets use a disjoint range)")
     crops.add_argument("--count", type=int, required=True)
@@ -161,7 +173,9 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     if args.what == "needles":
         count = len(load_needle_split(args.root, args.split))
-        written = write_crop_shard(args.out, real_needle_samples(args.root, args.split, args.size), count, args.size)
+        detector = shipped_detector() if args.crop_with_detector else None
+        written = write_crop_shard(args.out, real_needle_samples(args.root, args.split, args.size, detector), count,
+                                   args.size)
         log.info("wrote %d needle photos to %s", written, args.out)
     elif args.what == "crops":
         samples = synthetic_crop_samples(args.seed, args.count, args.size, engine=args.engine)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame, shipped_detector
 from gauged.evaluation.model_metrics import angle_error_deg, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps
 from gauged.training.augment import photometric, random_affine, warp_image, warp_points
@@ -121,9 +122,9 @@ def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> di
                         ends_total += 1
                         peaks = getattr(keypoints, name)
                         ends_found += int(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - np.asarray(truth[0])) <= tol)
-        for image, mask in real_val[:limit]:
+        for image, mask, crop in real_val[:limit]:
             logits = model(torch.from_numpy(image[None]))[0, -1].numpy()
-            pred = needle_mask_at(logits, mask.shape)
+            pred = needle_mask_at(logits, mask.shape) if crop is None else crop_logits_in_frame(logits, crop, size, mask.shape) > 0
             truth = mask > 0
             ious.append(mask_iou(pred, truth))
             centre = (pred.shape[1] / 2, pred.shape[0] / 2)
@@ -143,17 +144,21 @@ def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> di
     return metrics
 
 
-def load_real_needle_val(root: Path, size: int) -> list[tuple[np.ndarray, np.ndarray]]:
+def load_real_needle_val(root: Path, size: int, detector=None) -> list[tuple[np.ndarray, np.ndarray, object]]:
     """The needle-polygons ``valid`` photos resized to the model input, with their masks at the photo's
-    own resolution (the IoU is measured there, as the paper does)."""
+    own resolution (the IoU is measured there, as the paper does), and None.
+
+    With a ``detector``, each photo is cut to its detected gauge the reader's way instead, and the third
+    item is that :class:`gauged.reader.crop.Crop` (photos without a detection stay whole, with None)."""
     import cv2
 
     out = []
     for sample in load_needle_split(root, "valid"):
         image, mask = sample.load()
-        image = cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)
+        crop = best_gauge_crop(detector, image, size) if detector is not None else None
+        image = cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA) if crop is None else crop.image
         x = image[:, :, ::-1].astype(np.float32).transpose(2, 0, 1) / 255.0
-        out.append((np.ascontiguousarray(x), mask))
+        out.append((np.ascontiguousarray(x), mask, crop))
     return out
 
 
@@ -175,6 +180,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--weights", nargs="*", type=float, help="per-shard sampling weight per epoch (default 1)")
     parser.add_argument("--val", type=Path, help="synthetic validation crop shard")
     parser.add_argument("--real-val", type=Path, help="needle-polygons folder (its valid split is used)")
+    parser.add_argument("--real-val-crops", action="store_true",
+                        help="validate the needle on each --real-val photo cut to its detected gauge, as the reader does")
     parser.add_argument("--run", type=Path, required=True, help="run directory (checkpoints, history)")
     parser.add_argument("--size", type=int, default=224)
     parser.add_argument("--epochs", type=int, default=10)
@@ -186,6 +193,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--init", type=Path, help="start from this checkpoint's weights (fine-tuning; any input size), or from a shipped ONNX export of the same architecture (e.g. gauged/models/crop.onnx)")
     parser.add_argument("--needle-dilate-px", type=int, default=0,
                         help="widen synthetic needle masks by this many pixels per side (1 matches the real annotators' polygons)")
+    parser.add_argument("--train-all", action="store_true",
+                        help="with --needle-branch: train the trunk too (the result is a needle model of its own)")
     parser.add_argument("--needle-branch", action="store_true",
                         help="after --init (a net without a branch), give the needle mask its own decoder and "
                              "train only that (the keypoint maps stay exactly as they were)")
@@ -199,7 +208,8 @@ def main(argv: list[str] | None = None) -> int:
     shards = [open_crop_shard(p) for p in args.shards]
     weights = args.weights or [1.0] * len(shards)
     synth_val = open_crop_shard(args.val) if args.val else None
-    real_val = load_real_needle_val(args.real_val, args.size) if args.real_val else []
+    detector = shipped_detector() if args.real_val_crops else None
+    real_val = load_real_needle_val(args.real_val, args.size, detector) if args.real_val else []
     # channels_last makes the depthwise convolutions' backward pass ~1.7x faster on CPU (measured).
     # Any --init sets every weight, so the ImageNet ones are not loaded first.
     model = CropNet(args.size, pretrained=not (args.scratch or args.init)).to(memory_format=torch.channels_last)
@@ -215,10 +225,12 @@ def main(argv: list[str] | None = None) -> int:
             [augmented(shards[0].sample(i), args.size, None, 0.0)[0] for i in range(min(48, len(shards[0])))]))))
     if args.needle_branch and not init_has_branch:
         model.add_needle_branch()
+    if args.needle_branch and args.train_all:
+        model.unfreeze()
     if args.needle_branch:
         model.to(memory_format=torch.channels_last)
-        log.info("needle branch: %d trainable parameters, the rest frozen",
-                 sum(p.numel() for p in model.parameters() if p.requires_grad))
+        log.info("needle branch: %d trainable parameters%s", sum(p.numel() for p in model.parameters() if p.requires_grad),
+                 "" if args.train_all else ", the rest frozen")
     log.info("crop model: %d parameters, %s init; %s training samples", count_parameters(model),
              args.init or ("scratch" if args.scratch else "ImageNet"), [len(s) for s in shards])
     steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch

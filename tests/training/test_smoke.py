@@ -129,3 +129,25 @@ def test_needle_branch_starts_as_the_shared_decoder_and_trains_only_the_needle()
         after = model(x)
     assert torch.equal(after[:, :-1], before[:, :-1])  # keypoint maps untouched
     assert (after[:, -1] - before[:, -1]).abs().mean() > 1e-3  # the needle's branch learnt
+
+
+def test_an_unfrozen_needle_branch_trains_the_trunk_too():
+    model = CropNet(SIZE, pretrained=False, width=16)
+    model.add_needle_branch()
+    model.unfreeze()
+    assert all(p.requires_grad for p in model.parameters())
+    model.train()
+    assert model.encoder.training  # its BatchNorms learn statistics again
+    model.eval()
+    x = torch.rand(2, 3, SIZE, SIZE)
+    with torch.no_grad():
+        before = model(x)
+    optimizer = torch.optim.AdamW(model.parameters(), lr=1e-2)
+    model.train()
+    for _ in range(2):
+        optimizer.zero_grad()
+        model(x)[:, -1].sigmoid().mean().backward()
+        optimizer.step()
+    model.eval()
+    with torch.no_grad():
+        assert (model(x)[:, :-1] - before[:, :-1]).abs().mean() > 1e-4  # the keypoint maps drift with the trunk

@@ -1,0 +1,66 @@
+"""The crop model's view of a photo the reader's way: detect the gauge, cut its square crop, and map
+the crop model's needle logits back onto the photo.
+
+The reader never gives the crop model a whole photo: it crops the detected gauge first (as Reitsma
+et al. do). Training shards (``prerender needles --crop-with-detector``), validation during training
+and ``gauged eval models`` use these same two functions, so all three see what the reader sees.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from gauged.reader.crop import Crop, crop_gauge
+from gauged.reader.detect import GaugeDetector
+from gauged.types import StageFailure
+
+READER_CROP_PAD = 0.08  # the reader's default (GaugeReader crop_pad)
+
+
+def shipped_detector(threads: int = 2) -> GaugeDetector:
+    """The packaged gauge detector (``gauged/models/detector.onnx``)."""
+    from gauged.reader.factory import DETECTOR_MODEL
+    from gauged.reader.onnx_model import OnnxModel, packaged_model_path
+
+    return GaugeDetector(OnnxModel(packaged_model_path(DETECTOR_MODEL), threads=threads))
+
+
+def best_gauge_crop(detector: GaugeDetector, image: np.ndarray, size: int, pad: float = READER_CROP_PAD) -> Crop | None:
+    """The ``size``-px square crop of the detector's best gauge in ``image``, or None when the
+    detector finds none (or only one too small to crop)."""
+    found = detector.detect(image)
+    if isinstance(found, StageFailure):
+        return None
+    crop = crop_gauge(image, found[0].box, size, pad)
+    return None if isinstance(crop, StageFailure) else crop
+
+
+def crop_logits_in_frame(logits: np.ndarray, crop: Crop, crop_size: int, shape: tuple[int, ...],
+                         outside: float = -20.0) -> np.ndarray:
+    """A (g, g) logit map over a ``crop_size``-px crop, resampled bilinearly onto the (H, W) frame
+    ``shape[:2]`` it was cut from; frame pixels outside the crop get ``outside``.
+
+    Cell (i, j) covers crop pixels [j s, (j + 1) s) with s = crop_size / g, so its centre lies at
+    crop coordinate (j + 0.5) s, frame coordinate ``crop.to_frame`` of it, and frame pixel index
+    that minus 0.5 (pixel centres at +0.5).
+    """
+    logits = np.asarray(logits, np.float32)
+    step = crop_size / logits.shape[1]
+    scale, x0, y0 = crop.to_frame[0, 0], crop.to_frame[0, 2], crop.to_frame[1, 2]
+    cell_to_frame = np.array([[scale * step, 0.0, x0 + scale * step * 0.5 - 0.5],
+                              [0.0, scale * step, y0 + scale * step * 0.5 - 0.5]])
+    height, width = shape[:2]
+    return cv2.warpAffine(logits, cell_to_frame, (width, height), flags=cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=float(outside))
+
+
+def crop_mask(mask: np.ndarray, crop: Crop, crop_size: int) -> np.ndarray:
+    """A (H, W) {0, 1} frame mask cut to ``crop``'s square at ``crop_size`` px (nearest; outside the
+    frame is 0), the label that goes with ``crop.image``."""
+    scale, x0, y0 = crop.to_frame[0, 0], crop.to_frame[0, 2], crop.to_frame[1, 2]
+    crop_to_frame_index = np.array([[scale, 0.0, x0 + 0.5 * scale - 0.5], [0.0, scale, y0 + 0.5 * scale - 0.5]])
+    # Coverage by area, then cut at a half: a thin needle keeps its width better than nearest sampling.
+    coverage = cv2.warpAffine(mask.astype(np.float32), crop_to_frame_index, (crop_size, crop_size),
+                              flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    return (coverage >= 0.5).astype(np.uint8)
