@@ -272,7 +272,8 @@ def render_frame(spec: SceneSpec, *, cache: DialCache | None = None, values: dic
         h_out = scale_h @ h_units
         visible = float(counts[i + 1]) / max(area, 1)
         truths.append(gauge_truth(params, raster.texts, geom, h_out, apply_homography(scale_h, body), (out_w, out_h),
-                                  pl.gauge_id, min(1.0, visible), pl.pose.diameter_px * scale_h[0, 0]))
+                                  pl.gauge_id, min(1.0, visible), pl.pose.diameter_px * scale_h[0, 0],
+                                  front=idmap == i, front_scale=W / out_w))
         if masks:  # hidden: whatever is not this gauge's front (occluders, other gauges in front)
             hidden = np.where(idmap == i, 0, 255).astype(np.uint8)
             if output_scale != 1.0:

@@ -12,6 +12,11 @@ Image record::
     {"image": "000123.jpg" | null, "width": W, "height": H, "stamp_ns": int | null,
      "camera": str | null, "render_scale": float, "gauges": [Gauge, ...]}
 
+A notch is ``visible`` when the pixel under it shows this gauge's own dial: not an occluder, not
+another gauge in front, not outside the frame (the needle does not hide a notch: it is part of the
+dial). ``labelled`` says whether a number is printed at the notch. Records written before
+visibility existed lack the ``visible`` keys; readers take them as visible.
+
 ``render_scale`` is the share of the image's resolution the camera captured: 1.0, or for a crop
 rendered small and upsampled (a far gauge) its render size over its output size (0.12-0.6). A
 number 10 px tall in an image of render scale 0.25 was captured 2.5 px tall: that, not its size in
@@ -42,7 +47,8 @@ Scale::
     {"role": "primary" | "secondary", "min": float, "max": float, "unit": str, "unit_text": str,
      "ellipse": Ellipse,               # image of the circle through the major notch centres
      "start": [x, y], "end": [x, y],   # notch points of min and max
-     "majors": [{"value": v, "point": [x, y], "labelled": bool}, ...],   # every major notch
+     "majors": [{"value": v, "point": [x, y], "labelled": bool, "visible": bool}, ...],   # every major notch
+     "start_visible": bool, "end_visible": bool,
      "numbers": [Text, ...],           # every printed number, with "value"
      "unit_label": Text | null,
      "reading": float,                 # the needle's value on this scale
@@ -119,11 +125,14 @@ def _text_truth(t: PlacedText, h: np.ndarray) -> dict[str, Any]:
 
 def gauge_truth(params: GaugeParams, texts: tuple[PlacedText, ...], needle: NeedleGeometry, h: np.ndarray,
                 body_points: np.ndarray, image_size: tuple[int, int], gauge_id: str,
-                visible_fraction: float, diameter_px: float) -> GaugeTruth:
+                visible_fraction: float, diameter_px: float, front: np.ndarray | None = None,
+                front_scale: float = 1.0) -> GaugeTruth:
     """Project the face-unit geometry of a gauge through ``h`` (face units -> image px).
 
     ``body_points`` (N, 2) are image points of the visible case outline (for the box);
-    ``image_size`` is (width, height).
+    ``image_size`` is (width, height). ``front`` (rows, cols) bool is where this gauge's dial is
+    seen, sampled at image point times ``front_scale`` (its resolution over the image's); None
+    marks every notch inside the image visible.
     """
     width, height = image_size
     face = project_circle(h, 0.0, 0.0, 1.0)
@@ -144,12 +153,14 @@ def gauge_truth(params: GaugeParams, texts: tuple[PlacedText, ...], needle: Need
         ends = apply_homography(h, s.radius * np.array([[math.cos(s.start_angle), math.sin(s.start_angle)],
                                                         [math.cos(s.end_angle), math.sin(s.end_angle)]]))
         unit_label = [t for t in texts if t.kind == "unit" and t.scale == i]
+        seen = _visible(np.vstack([pts.reshape(-1, 2), ends]), front, front_scale, image_size)
         scales.append({
             "role": s.role, "min": _value(s.min), "max": _value(s.max), "unit": s.unit, "unit_text": s.unit_text,
             "ellipse": _ellipse(project_circle(h, 0.0, 0.0, s.radius)),
             "start": _pt(ends[0]), "end": _pt(ends[1]),
-            "majors": [{"value": _value(v), "point": _pt(p), "labelled": round(float(v), 9) in labels}
-                       for v, p in zip(majors, pts)],
+            "start_visible": bool(seen[-2]), "end_visible": bool(seen[-1]),
+            "majors": [{"value": _value(v), "point": _pt(p), "labelled": round(float(v), 9) in labels,
+                        "visible": bool(seen[k])} for k, (v, p) in enumerate(zip(majors, pts))],
             "numbers": [_text_truth(t, h) for t in texts if t.kind == "number" and t.scale == i],
             "unit_label": _text_truth(unit_label[0], h) if unit_label else None,
             "reading": _value(s.value_at(angle)),
@@ -180,6 +191,18 @@ def gauge_truth(params: GaugeParams, texts: tuple[PlacedText, ...], needle: Need
         "texts": [_text_truth(t, h) for t in texts if t.kind not in ("number", "unit")],
     }
     return GaugeTruth(data)
+
+
+def _visible(points: np.ndarray, front: np.ndarray | None, front_scale: float,
+             image_size: tuple[int, int]) -> np.ndarray:
+    """Per (N, 2) image point: inside the image and, with ``front``, on this gauge's seen dial."""
+    width, height = image_size
+    inside = (points[:, 0] >= 0) & (points[:, 0] < width) & (points[:, 1] >= 0) & (points[:, 1] < height)
+    if front is None:
+        return inside
+    cols = np.clip((points[:, 0] * front_scale).astype(int), 0, front.shape[1] - 1)
+    rows = np.clip((points[:, 1] * front_scale).astype(int), 0, front.shape[0] - 1)
+    return inside & front[rows, cols]
 
 
 def image_record(gauges: list[GaugeTruth], width: int, height: int, *, image: str | None = None,

@@ -158,3 +158,41 @@ def test_crop_records_say_at_what_share_of_their_resolution_they_were_captured()
     assert math.isclose(far["render_scale"], 24 / 64, abs_tol=1e-4)
     assert near["render_scale"] == 1.0
     assert render_item(("scene", 3, 0, 160, 120, 64, False))[1]["render_scale"] == 1.0
+
+
+@pytest.mark.parametrize("seed", [129, 131, 132])
+def test_notches_behind_an_occluder_are_marked_hidden(seed: int) -> None:
+    from gauged.synth.crop import sample_crop_spec
+
+    spec, scale = sample_crop_spec(np.random.default_rng(seed), 256)
+    assert spec.occluders == 1
+    covered = render_frame(spec, output_scale=scale)
+    bare = render_frame(replace(spec, occluders=0), output_scale=scale)
+
+    def majors(result):
+        return [m for s in result.truths[0].to_dict()["scales"] for m in s["majors"]]
+
+    size = covered.image.shape[0]
+    inside = [0 <= m["point"][0] < size and 0 <= m["point"][1] < size for m in majors(bare)]
+    assert [m["visible"] for m in majors(bare)] == inside  # nothing hides them but the frame edge
+    hidden = [m for m in majors(covered) if not m["visible"] and 0 <= m["point"][0] < size and 0 <= m["point"][1] < size]
+    assert hidden
+    change = np.abs(covered.image.astype(int) - bare.image.astype(int)).max(axis=2)
+    for m in hidden:  # each hidden notch lies where the occluder changed the picture
+        x, y = (int(v) for v in m["point"])
+        assert change[max(0, y - 1):y + 2, max(0, x - 1):x + 2].max() > 30
+
+
+def test_training_labels_keep_only_the_notches_the_image_shows() -> None:
+    from gauged.training.prerender import synth_points
+
+    truth = render_crop(132, 256, masks=False).truth
+    scales = truth["scales"]
+    seen = [m["point"] for s in scales for m in s["majors"] if m["visible"]]
+    assert 0 < len(seen) < sum(len(s["majors"]) for s in scales)
+    assert synth_points(truth)["major"] == seen
+    primary = scales[0]
+    hidden_start = dict(truth, scales=[dict(primary, start_visible=False)] + scales[1:])
+    assert synth_points(hidden_start)["start"] == []  # labelled: no start to be seen
+    old = dict(truth, scales=[{k: v for k, v in primary.items() if not k.endswith("_visible")}])
+    assert synth_points(old)["start"] == [primary["start"]]  # records from before visibility count as seen
