@@ -1,0 +1,226 @@
+"""A recogniser of scale numbers trained on the engine's renders: data, net and training (session 10).
+
+NOT USED BY THE READER YET. The reader reads numbers with PP-OCR's recogniser (:mod:`gauged.reader.ocr_engine`).
+Cut at their true quads, PP-OCR reads 71.5% of the held-out numbers captured 5-10 px tall and 87.5%
+of those 10-14 px (docs/accuracy.md, session 10); this net, trained on number lines of other seeds
+cut the same way, reads more at every height (docs/ocr.md, "A recogniser of our own"). Before the
+reader can use it, it must be trained and measured on the lines the reader's own text detector cuts
+(not true quads) and on real photos; until then it is training code only.
+
+    python -m gauged.training.number_lines data --seed 2000000 --count 6000 --out data/num-train.npz
+    python -m gauged.training.number_lines data --seed 2100000 --count 300 --out data/num-val.npz
+    python -m gauged.training.number_lines train --data data/num-train.npz --val data/num-val.npz \\
+        --epochs 6 --out runs/numbers/best.pt
+
+A line is the number's true quad widened by half its height each side and to 1.5 times its height
+(jittered in training), warped upright, grey, resized to 32 px tall and padded to 128 px. The net is
+a small CNN (to 2 x 32 cells) and a bidirectional GRU, read by CTC over ``0-9 . , -``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import time
+from multiprocessing import Pool
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from gauged.reader.ocr_engine import crop_quad
+from gauged.synth.crop import render_crop
+
+log = logging.getLogger(__name__)
+
+CHARS = "0123456789.,-"
+LINE_HEIGHT, LINE_WIDTH = 32, 128
+HEIGHT_BINS = ((0, 5), (5, 10), (10, 14), (14, 18), (18, 1e9))  # px as captured (docs/accuracy.md)
+
+
+def number_lines(image: np.ndarray, gauge: dict, render_scale: float,
+                 rng: np.random.Generator | None = None) -> list[tuple[np.ndarray, str, float]]:
+    """(line image BGR, printed text, height as captured in px) of every scale number of a
+    :mod:`gauged.synth.truth` gauge record; ``rng`` jitters each line's margin and centre."""
+    out = []
+    for scale in gauge["scales"]:
+        for number in scale["numbers"]:
+            quad = np.asarray(number["quad"], float)
+            centre = quad.mean(axis=0)
+            height = float(np.linalg.norm(quad[0] - quad[3]))
+            width = max(1.0, float(np.linalg.norm(quad[0] - quad[1])))
+            grow = np.array([1.0 + 0.5 * height / width, 1.5])
+            if rng is not None:
+                grow *= (rng.uniform(0.9, 1.15), rng.uniform(0.85, 1.2))
+                centre = centre + rng.normal(0, 0.08 * height, 2)
+            # Grown about its centre in image x and y (as measured in session 10), then moved.
+            line = crop_quad(image, centre + (quad - quad.mean(axis=0)) * grow)
+            out.append((line, number["text"], height * render_scale))
+    return out
+
+
+def to_line_input(line_bgr: np.ndarray) -> np.ndarray:
+    """(LINE_HEIGHT, LINE_WIDTH) uint8 grey: the line resized to the height, padded right with its median."""
+    grey = cv2.cvtColor(line_bgr, cv2.COLOR_BGR2GRAY)
+    h, w = grey.shape
+    width = max(1, min(LINE_WIDTH, int(round(w * LINE_HEIGHT / max(1, h)))))
+    grey = cv2.resize(grey, (width, LINE_HEIGHT), interpolation=cv2.INTER_AREA if h > LINE_HEIGHT else cv2.INTER_CUBIC)
+    out = np.full((LINE_HEIGHT, LINE_WIDTH), int(np.median(grey)), np.uint8)
+    out[:, :width] = grey
+    return out
+
+
+def encode(text: str) -> list[int]:
+    """CTC labels (1-based; 0 is the blank) of the characters of ``text`` the net knows."""
+    return [CHARS.index(c) + 1 for c in text.replace("\u2212", "-") if c in CHARS]
+
+
+def _render_lines(seed: int) -> list[tuple[np.ndarray, str, float]]:
+    sample = render_crop(seed, 448, masks=False)
+    rng = np.random.default_rng(seed)
+    return [(to_line_input(line), text, h)
+            for line, text, h in number_lines(sample.image, sample.truth, 1.0 / sample.output_scale, rng)]
+
+
+def write_lines(first_seed: int, count: int, out: Path, workers: int = 2) -> int:
+    """Render ``count`` engine crops from ``first_seed`` and save their number lines to ``out`` (.npz)."""
+    lines, texts, heights = [], [], []
+    with Pool(workers) as pool:
+        for i, items in enumerate(pool.imap(_render_lines, range(first_seed, first_seed + count), chunksize=8)):
+            for line, text, h in items:
+                lines.append(line), texts.append(text), heights.append(h)
+            if (i + 1) % 500 == 0:
+                log.info("rendered %d/%d crops, %d lines", i + 1, count, len(lines))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(out, x=np.stack(lines), t=np.asarray(texts), h=np.asarray(heights, np.float32))
+    return len(lines)
+
+
+class NumberNet(nn.Module):
+    """(N, 1, 32, 128) grey in [0, 1] -> (N, 32, len(CHARS) + 1) CTC logits (blank first)."""
+
+    def __init__(self, width: int = 48):
+        super().__init__()
+
+        def block(cin: int, cout: int) -> nn.Sequential:
+            return nn.Sequential(nn.Conv2d(cin, cout, 3, padding=1, bias=False), nn.BatchNorm2d(cout), nn.ReLU(inplace=True))
+
+        w = width
+        self.features = nn.Sequential(block(1, w), nn.MaxPool2d(2), block(w, 2 * w), nn.MaxPool2d(2),
+                                      block(2 * w, 2 * w), block(2 * w, 4 * w), nn.MaxPool2d((2, 1)),
+                                      block(4 * w, 4 * w), nn.MaxPool2d((2, 1)))  # -> (4w, 2, 32)
+        self.rnn = nn.GRU(8 * w, 96, bidirectional=True, batch_first=True)
+        self.out = nn.Linear(192, len(CHARS) + 1)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        f = self.features(x).flatten(1, 2).transpose(1, 2)  # (N, 32, 8w)
+        return self.out(self.rnn(f)[0])
+
+
+def greedy_decode(logits: torch.Tensor) -> list[str]:
+    """Best path of (N, T, K) logits: repeats merged, blanks dropped."""
+    out = []
+    for row in logits.argmax(-1).tolist():
+        chars, previous = [], 0
+        for k in row:
+            if k != previous and k != 0:
+                chars.append(CHARS[k - 1])
+            previous = k
+        out.append("".join(chars))
+    return out
+
+
+def _augmented(line: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    x = line.astype(np.float32)
+    if rng.random() < 0.15:
+        x = 255.0 - x  # light numbers on a dark face
+    x = x * rng.uniform(0.7, 1.3) + rng.uniform(-30, 30)
+    if rng.random() < 0.3:
+        x = x + rng.normal(0, rng.uniform(2, 10), x.shape)
+    return np.clip(x, 0, 255)
+
+
+def exact_by_height(net: NumberNet, lines: np.ndarray, texts: np.ndarray, heights: np.ndarray) -> dict[str, float]:
+    """Share of lines read exactly, per captured-height bin and over all lines of 5 px or more."""
+    net.eval()
+    read = []
+    with torch.no_grad():
+        for i in range(0, len(lines), 256):
+            read += greedy_decode(net(torch.from_numpy(lines[i:i + 256, None].astype(np.float32) / 255.0)))
+    right = np.array([r == t.replace("\u2212", "-") for r, t in zip(read, texts)])
+    out = {f"{lo:g}-{hi:g}" if hi < 1e9 else f">={lo:g}": float(right[(heights >= lo) & (heights < hi)].mean())
+           for lo, hi in HEIGHT_BINS if ((heights >= lo) & (heights < hi)).any()}
+    out["legible"] = float(right[heights >= 5].mean()) if (heights >= 5).any() else float("nan")
+    return out
+
+
+def train_number_net(data: Path, val: Path, epochs: int, out: Path, batch: int = 64, lr: float = 2e-3,
+                     threads: int = 2, seed: int = 0) -> dict[str, float]:
+    """Train on ``data`` lines, keep the checkpoint best on ``val`` (legible share) at ``out``."""
+    torch.set_num_threads(threads)
+    torch.manual_seed(seed)
+    train_set, val_set = np.load(data), np.load(val)
+    keep = np.array([len(encode(t)) > 0 for t in train_set["t"]])
+    lines, texts = train_set["x"][keep], train_set["t"][keep]
+    net = NumberNet()
+    optimiser = torch.optim.AdamW(net.parameters(), lr, weight_decay=1e-4)
+    steps = epochs * (len(lines) // batch)
+    schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, lr, total_steps=steps, pct_start=0.1)
+    rng = np.random.default_rng(seed)
+    best: dict[str, float] = {"legible": -1.0}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    for epoch in range(epochs):
+        net.train()
+        started, total, count = time.monotonic(), 0.0, 0
+        order = rng.permutation(len(lines))
+        for i in range(0, len(order) - batch + 1, batch):
+            pick = order[i:i + batch]
+            x = torch.from_numpy(np.stack([_augmented(lines[j], rng) for j in pick])[:, None] / 255.0).float()
+            labels = [encode(texts[j]) for j in pick]
+            logp = net(x).log_softmax(-1).transpose(0, 1)  # (T, N, K)
+            loss = F.ctc_loss(logp, torch.tensor([c for label in labels for c in label]),
+                              torch.full((len(pick),), logp.shape[0], dtype=torch.long),
+                              torch.tensor([len(label) for label in labels]), zero_infinity=True)
+            optimiser.zero_grad()
+            loss.backward()
+            nn.utils.clip_grad_norm_(net.parameters(), 5.0)
+            optimiser.step()
+            schedule.step()
+            total, count = total + loss.item(), count + 1
+        metrics = exact_by_height(net, val_set["x"], val_set["t"], val_set["h"])
+        log.info("epoch %d/%d loss %.3f (%.0f s) read exactly: %s", epoch + 1, epochs, total / max(1, count),
+                 time.monotonic() - started, json.dumps({k: round(v, 3) for k, v in metrics.items()}))
+        if metrics["legible"] > best["legible"]:
+            best = metrics
+            torch.save(net.state_dict(), out)
+    return best
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="what", required=True)
+    data = sub.add_parser("data", help="number lines of engine crops -> .npz")
+    data.add_argument("--seed", type=int, required=True, help="first seed (keep clear of the evaluation sets' seeds)")
+    data.add_argument("--count", type=int, required=True, help="crops to render")
+    data.add_argument("--out", type=Path, required=True)
+    fit = sub.add_parser("train", help="train the number net")
+    fit.add_argument("--data", type=Path, required=True)
+    fit.add_argument("--val", type=Path, required=True)
+    fit.add_argument("--epochs", type=int, default=6)
+    fit.add_argument("--out", type=Path, required=True, help="checkpoint of the best epoch")
+    fit.add_argument("--threads", type=int, default=2)
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    if args.what == "data":
+        log.info("wrote %d number lines to %s", write_lines(args.seed, args.count, args.out), args.out)
+    else:
+        log.info("best: %s", json.dumps(train_number_net(args.data, args.val, args.epochs, args.out, threads=args.threads)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

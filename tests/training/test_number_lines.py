@@ -1,0 +1,44 @@
+"""The number-line recogniser's data and training (session 10 groundwork, not used by the reader)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
+
+from gauged.synth.crop import render_crop  # noqa: E402
+from gauged.training.number_lines import (CHARS, LINE_HEIGHT, LINE_WIDTH, NumberNet, encode, exact_by_height,  # noqa: E402
+                                          greedy_decode, number_lines, to_line_input, train_number_net)
+
+
+def test_lines_of_a_render_carry_its_printed_numbers():
+    sample = render_crop(7000003, 448, masks=False)
+    lines = number_lines(sample.image, sample.truth, 1.0)
+    printed = [n["text"] for s in sample.truth["scales"] for n in s["numbers"]]
+    assert [text for _, text, _ in lines] == printed and len(printed) >= 3
+    x = to_line_input(lines[0][0])
+    assert x.shape == (LINE_HEIGHT, LINE_WIDTH) and x.dtype == np.uint8
+    assert all(h > 3 for _, _, h in lines)
+
+
+def test_ctc_labels_and_best_path():
+    assert encode("-0,5") == [CHARS.index(c) + 1 for c in "-0,5"]
+    assert encode("\u22122") == encode("-2")  # the typographic minus is a minus
+    logits = torch.full((1, 6, len(CHARS) + 1), -5.0)
+    for t, k in enumerate([2, 2, 0, 2, 0, 11]):  # "1", "1" (repeat merged), blank, "1", blank, "."
+        logits[0, t, k] = 5.0
+    assert greedy_decode(logits) == ["11."]
+
+
+def test_training_writes_the_best_checkpoint(tmp_path):
+    rng = np.random.default_rng(0)
+    texts = np.array(["10", "20", "5", "0,5"] * 16)
+    lines = rng.integers(0, 255, (len(texts), LINE_HEIGHT, LINE_WIDTH), dtype=np.uint8)
+    heights = np.full(len(texts), 12.0, np.float32)
+    np.savez(tmp_path / "d.npz", x=lines, t=texts, h=heights)
+    best = train_number_net(tmp_path / "d.npz", tmp_path / "d.npz", 1, tmp_path / "best.pt", batch=16, threads=1)
+    assert 0.0 <= best["legible"] <= 1.0 and set(best) >= {"10-14", "legible"}
+    net = NumberNet()
+    net.load_state_dict(torch.load(tmp_path / "best.pt"))
+    assert exact_by_height(net, lines, texts, heights)["legible"] == best["legible"]
