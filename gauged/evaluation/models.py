@@ -18,9 +18,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gauged.evaluation.timing import median_s
 from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame
 from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
+from gauged.evaluation.timing import median_s
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, OCR_DET_INT8_MODEL, model_path
 from gauged.reader.keypoints import decode_crop_maps
@@ -74,6 +74,8 @@ def needle_metrics(crop: OnnxModel, root: Path, detector: GaugeDetector | None =
 
 
 def _needle_scores(crop: OnnxModel, samples, crop_of) -> dict:
+    """IoU and direction over ``samples``; ``crop_of(image)`` gives the reader's crop of a photo, or
+    None to give the crop model the whole photo."""
     size = crop.input_size
     ious, errors, whole = [], [], 0
     for sample in samples:
