@@ -42,3 +42,25 @@ def test_training_writes_the_best_checkpoint(tmp_path):
     net = NumberNet()
     net.load_state_dict(torch.load(tmp_path / "best.pt"))
     assert exact_by_height(net, lines, texts, heights)["legible"] == best["legible"]
+
+
+def test_compare_counts_every_main_scale_number_for_both_recognisers(tmp_path):
+    import subprocess
+    import sys
+
+    from gauged.training.number_lines import compare_with_ppocr
+
+    made = subprocess.run([sys.executable, "-m", "gauged", "synth", "images", "--kind", "crop", "--size", "448",
+                           "--count", "2", "--seed", "5000100", "--out", str(tmp_path / "renders")],
+                          capture_output=True, text=True, timeout=300)
+    assert made.returncode == 0, made.stderr
+    torch.manual_seed(0)
+    torch.save(NumberNet().state_dict(), tmp_path / "untrained.pt")
+    table = compare_with_ppocr(tmp_path / "renders", tmp_path / "untrained.pt")
+    import json
+
+    records = [json.loads(line) for line in (tmp_path / "renders" / "labels.jsonl").read_text().splitlines()]
+    printed = sum(len(r["gauges"][0]["scales"][0]["numbers"]) for r in records)
+    assert sum(row["numbers"] for row in table.values()) == printed
+    assert all(0.0 <= row["number_net"] <= 1.0 for row in table.values())
+    assert any(row["ppocr"] > 0.5 for row in table.values())  # PP-OCR reads clean renders' numbers
