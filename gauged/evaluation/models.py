@@ -22,7 +22,7 @@ from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame
 from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.evaluation.timing import median_s
 from gauged.reader.detect import GaugeDetector
-from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, OCR_DET_INT8_MODEL, model_path
+from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, NUMBER_NET_MODEL, OCR_DET_INT8_MODEL, model_path
 from gauged.reader.keypoints import decode_crop_maps
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path, to_model_input
 from gauged.types import StageFailure
@@ -168,9 +168,9 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
         detector_model = None  # reported as missing rather than failing the crop-model figures
     # Every ONNX file the reader ships: the two models and the OCR's int8 text detector.
     files = [m.path for m in (crop, detector_model) if m is not None]
-    ocr_int8 = packaged_model_path(OCR_DET_INT8_MODEL)
-    if ocr_int8.is_file():
-        files.append(ocr_int8)
+    for name in (OCR_DET_INT8_MODEL, NUMBER_NET_MODEL):
+        if packaged_model_path(name).is_file():
+            files.append(packaged_model_path(name))
     result: dict = {"files_mb": round(sum(p.stat().st_size for p in files) / 2**20, 2),
                     "files": [p.name for p in files]}
     crop_input = np.zeros((crop.input_size, crop.input_size, 3), np.float32)

@@ -16,6 +16,7 @@ log = logging.getLogger(__name__)
 CROP_MODEL = "crop.onnx"
 DETECTOR_MODEL = "detector.onnx"
 OCR_DET_INT8_MODEL = "ocr_det_int8.onnx"  # int8 copy of the OCR wheel's text detector (gauged.training.quantize_ocr)
+NUMBER_NET_MODEL = "numbers.onnx"  # the scale-number recogniser (gauged.training.number_lines)
 
 
 def model_path(name: str, models_dir: Path | None = None) -> Path:
@@ -39,7 +40,8 @@ def build_reader(config: ReaderConfig) -> GaugeReader:
 
     try:
         ocr = ScaleTextReader(threads=config.threads,
-                              int8_detector=packaged_model_path(OCR_DET_INT8_MODEL) if config.ocr_int8_detector else None)
+                              int8_detector=packaged_model_path(OCR_DET_INT8_MODEL) if config.ocr_int8_detector else None,
+                              number_net=packaged_model_path(NUMBER_NET_MODEL) if config.ocr_number_net else None)
     except OcrUnavailable as exc:  # OCR is optional when every gauge has a configured scale
         log.warning("OCR is not available (%s): gauges without a configured scale cannot be read", exc)
         ocr = None

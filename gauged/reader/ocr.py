@@ -46,6 +46,7 @@ from gauged.geometry.rectify import rectifying_homography, unrectify_points, war
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.likely_scale import RingText, likely_markers
 from gauged.reader.numbers import filter_progression, merge_fragments, parse_number
+from gauged.reader.number_net import NumberNet
 from gauged.reader.ocr_engine import DEFAULT_MODEL_PACKAGE, OcrEngine, TextBox, crop_quad
 from gauged.reader.ocr_regions import RING, ink_box, polar_strip
 from gauged.reader.units import match_unit, read_unit
@@ -109,13 +110,16 @@ class ScaleTextReader:
     used (:data:`gauged.reader.ocr_engine.MODEL_SETS`), ``min_score`` the recogniser score under
     which a reading is tried in other orientations and, if still under, dropped. ``det_side`` is the
     detector's input side in pixels for the ring around the circle. ``int8_detector`` is the int8
-    copy of the text detector to run instead of the float one (:class:`OcrEngine`).
+    copy of the text detector to run instead of the float one (:class:`OcrEngine`); ``number_net`` the
+    number net's ONNX file (:mod:`gauged.reader.number_net`) that reads digit lines again.
     """
 
     def __init__(self, threads: int = 2, models: str = DEFAULT_MODEL_PACKAGE, min_score: float = 0.5,
                  det_side: int = 384, use_hints: bool = True, progression: bool = True,
-                 polar_fallback: bool = True, quick: bool = True, int8_detector: Path | None = None) -> None:
-        self.engine = OcrEngine(threads=threads, package=models, int8_detector=int8_detector)
+                 polar_fallback: bool = True, quick: bool = True, int8_detector: Path | None = None,
+                 number_net: Path | None = None) -> None:
+        self.engine = OcrEngine(threads=threads, package=models, int8_detector=int8_detector,
+                                number_net=NumberNet(number_net, threads) if number_net is not None else None)
         self.min_score = min_score
         self.det_side = det_side
         self.use_hints = use_hints
@@ -338,6 +342,17 @@ class ScaleTextReader:
         views = self.ring_texts(crop, arc, hints, detail)
         start, end = unwrap(arc.start_angle, arc.zero_angle), unwrap(arc.end_angle, arc.zero_angle)
         return likely_markers(views, float(start), float(end), self.engine.log_likelihood)
+
+    @property
+    def has_number_net(self) -> bool:
+        return self.engine.number_net is not None
+
+    def read_markers_by_number_net(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray,
+                                   detail: np.ndarray | None = None) -> tuple[list[ScaleMarker], str | None] | StageFailure:
+        """:meth:`read_markers` again, every digit line read by the number net too
+        (:meth:`OcrEngine.reading_numbers_again`): for a dial whose first markers gave no scale."""
+        with self.engine.reading_numbers_again():
+            return self.read_markers(crop, arc, hints, detail)
 
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
                      ) -> tuple[list[ScaleMarker], str | None] | StageFailure:

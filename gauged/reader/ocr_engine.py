@@ -28,12 +28,16 @@ import logging
 import math
 import threading
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from gauged.reader.number_net import NumberNet
+from gauged.types import StageFailure
 
 log = logging.getLogger(__name__)
 
@@ -215,7 +219,7 @@ class OcrEngine:
     """
 
     def __init__(self, threads: int = 2, package: str = DEFAULT_MODEL_PACKAGE,
-                 int8_detector: Path | None = None, memo: int = REC_MEMO) -> None:
+                 int8_detector: Path | None = None, memo: int = REC_MEMO, number_net: NumberNet | None = None) -> None:
         if threads < 1:
             raise ValueError("threads must be >= 1")
         det_path, rec_path = find_model_files(package)
@@ -240,6 +244,7 @@ class OcrEngine:
         self._minus_fold = ((self._digit_label["-"], self._digit_label["−"])
                             if "-" in self._digit_label and "−" in self._digit_label else None)
         self.memo_size = memo
+        self.number_net = number_net
         self._local = threading.local()
 
     def _class_subset(self, chars: frozenset[str]) -> np.ndarray:
@@ -299,7 +304,8 @@ class OcrEngine:
         """Read each (h, w, 3) uint8 BGR line image (text left to right, upright), each distinct
         line once: a line in the memo or earlier in ``lines`` is not run through the network again."""
         memo = self._memo
-        keys = [_line_key(line) for line in lines]
+        again = self.numbers_again
+        keys = [(again, *_line_key(line)) for line in lines]
         fresh: dict[tuple, int] = {}  # lines not in the memo: key -> index of the first such line
         for i, key in enumerate(keys):
             if key not in memo and key not in fresh:
@@ -342,7 +348,40 @@ class OcrEngine:
                     sub[:, self._minus_fold[1]] = 0.0
                 logp = np.log(np.clip(sub / np.maximum(sub.sum(axis=1, keepdims=True), 1e-12), 1e-9, 1.0))
                 out[i] = Recognition(text.strip(), score, digits, dscore, logp.astype(np.float32))
-        return [r for r in out if r is not None]
+        read = [r for r in out if r is not None]
+        return self._numbers_read_again(lines, read) if self.number_net is not None and self.numbers_again else read
+
+    @property
+    def numbers_again(self) -> bool:
+        """Whether this thread's recognitions take the number net's numbers (:meth:`reading_numbers_again`)."""
+        return getattr(self._local, "numbers_again", False)
+
+    @contextmanager
+    def reading_numbers_again(self) -> Iterator[None]:
+        """Within the block, this thread's lines that PP-OCR reads digits in are read by the number net
+        too (:meth:`_numbers_read_again`); the memo keeps the two kinds of reading apart."""
+        if self.number_net is None:
+            raise RuntimeError("this engine has no number net")
+        before = self.numbers_again
+        self._local.numbers_again = True
+        try:
+            yield
+        finally:
+            self._local.numbers_again = before
+
+    def _numbers_read_again(self, lines: Sequence[np.ndarray], read: list[Recognition]) -> list[Recognition]:
+        """Each line PP-OCR read digits in, read by the number net too; where the net reads a number,
+        its string becomes the line's digits (and its text, when that held a digit). The scores and
+        ``digit_logp`` stay PP-OCR's."""
+        from gauged.reader.numbers import parse_number  # numbers imports this module's TextBox
+
+        out = []
+        for rec, net_text in zip(read, self.number_net.read(lines), strict=True):
+            if rec.digits and net_text and net_text != rec.digits and not isinstance(parse_number(net_text), StageFailure):
+                text = net_text if any(c.isdigit() for c in rec.text) else rec.text
+                rec = Recognition(text, rec.score, net_text, rec.digits_score, rec.digit_logp)
+            out.append(rec)
+        return out
 
     def log_likelihood(self, recognition: Recognition, text: str) -> float:
         """log P(``text`` | the line) under the recogniser restricted to :data:`NUMBER_CHARS`, summed

@@ -113,6 +113,16 @@ class _Span:
         self.sink[self.stage] = self.sink.get(self.stage, 0.0) + time.perf_counter() - self.start
 
 
+RETRY_ZERO_MARGIN = 0.05  # of the span: a fitted end this far past zero is on the other side of it
+
+
+def _across_zero(scale: ScaleModel) -> bool:
+    """Whether ``scale`` runs from clearly below zero to clearly above it (a fit's 0 end lands a
+    little off zero: -0.28 on a 0..300 dial)."""
+    margin = RETRY_ZERO_MARGIN * (scale.max_value - scale.min_value)
+    return scale.min_value < -margin and scale.max_value > margin
+
+
 class GaugeReader:
     """Reads gauges with the shipped models. Create once; ``read_image`` / ``read_box`` per frame."""
 
@@ -302,6 +312,18 @@ class GaugeReader:
             result.markers, unit = read
             with timer("scale"):
                 scales = fit_scales(arc, result.markers, unit, hints=hints)
+            if isinstance(scales, StageFailure) and scales.stage == "scale" and self.ocr.has_number_net:
+                # The numbers read gave no scale: read them again with the number net, which misreads
+                # half as many small numbers as PP-OCR (docs/ocr.md). Only refusals get this read,
+                # and the refusal stands unless the scale stage accepts what it reads.
+                with timer("ocr"):
+                    again = self.ocr.read_markers_by_number_net(crop.image, arc, numbers.points, detail)
+                if not isinstance(again, StageFailure):
+                    with timer("scale"):
+                        retry = fit_scales(arc, again[0], again[1], hints=hints)
+                    # The net drops minus signs: a retried scale across zero is not trusted (docs/ocr.md).
+                    if not isinstance(retry, StageFailure) and not _across_zero(retry[0]):
+                        (result.markers, unit), scales = again, retry
         result.unit = unit
         if isinstance(scales, StageFailure) and scales.stage in SECOND_LOOK:
             # The numbers read gave no scale: look again for the grid the ring's texts most likely

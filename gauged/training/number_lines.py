@@ -1,16 +1,18 @@
 """A recogniser of scale numbers trained on the engine's renders: data, net and training (session 10).
 
-NOT USED BY THE READER YET. The reader reads numbers with PP-OCR's recogniser (:mod:`gauged.reader.ocr_engine`).
+The reader reads numbers with PP-OCR's recogniser (:mod:`gauged.reader.ocr_engine`), and reads a
+dial again with this net (exported to ``gauged/models/numbers.onnx``, run by
+:mod:`gauged.reader.number_net`) only when its first numbers gave no scale.
 Cut at their true quads, PP-OCR reads 71.2% of the held-out numbers captured 5-10 px tall and 87.8%
 of those 10-14 px; this net, trained on number lines of other seeds cut the same way, reads 85.9%
-and 93.5% (docs/ocr.md, "A recogniser of our own"). Before the reader can use it, it must be trained
-and measured on the lines the reader's own text detector cuts (not true quads) and on real photos;
-until then it is training code only.
+and 93.5% (docs/ocr.md, "A recogniser of our own").
 
     python -m gauged.training.number_lines data --seed 2000000 --count 6000 --out data/num-train.npz
     python -m gauged.training.number_lines data --seed 2100000 --count 300 --out data/num-val.npz
     python -m gauged.training.number_lines train --data data/num-train.npz --val data/num-val.npz \\
         --epochs 6 --out runs/numbers/best.pt
+    python -m gauged.training.number_lines compare --data data/held1000 --weights runs/numbers/best.pt
+    python -m gauged.training.number_lines export --weights runs/numbers/best.pt --out gauged/models/numbers.onnx
 
 A line is the number's true quad widened by half its height each side and to 1.5 times its height
 (jittered in training), warped upright, grey, resized to 32 px tall and padded to 128 px. The net is
@@ -32,13 +34,13 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
+from gauged.reader.number_net import CHARS, LINE_HEIGHT, LINE_WIDTH, to_line_input
+from gauged.reader.number_net import greedy_decode as decode_logits
 from gauged.reader.ocr_engine import crop_quad
 from gauged.synth.crop import render_crop
 
 log = logging.getLogger(__name__)
 
-CHARS = "0123456789.,-"
-LINE_HEIGHT, LINE_WIDTH = 32, 128
 HEIGHT_BINS = ((0, 5), (5, 10), (10, 14), (14, 18), (18, 1e9))  # px as captured (docs/accuracy.md)
 
 
@@ -60,17 +62,6 @@ def number_lines(image: np.ndarray, gauge: dict, render_scale: float,
             # Grown about its centre in image x and y (as measured in session 10), then moved.
             line = crop_quad(image, centre + (quad - quad.mean(axis=0)) * grow)
             out.append((line, number["text"], height * render_scale))
-    return out
-
-
-def to_line_input(line_bgr: np.ndarray) -> np.ndarray:
-    """(LINE_HEIGHT, LINE_WIDTH) uint8 grey: the line resized to the height, padded right with its median."""
-    grey = cv2.cvtColor(line_bgr, cv2.COLOR_BGR2GRAY)
-    h, w = grey.shape
-    width = max(1, min(LINE_WIDTH, int(round(w * LINE_HEIGHT / max(1, h)))))
-    grey = cv2.resize(grey, (width, LINE_HEIGHT), interpolation=cv2.INTER_AREA if h > LINE_HEIGHT else cv2.INTER_CUBIC)
-    out = np.full((LINE_HEIGHT, LINE_WIDTH), int(np.median(grey)), np.uint8)
-    out[:, :width] = grey
     return out
 
 
@@ -122,16 +113,8 @@ class NumberNet(nn.Module):
 
 
 def greedy_decode(logits: torch.Tensor) -> list[str]:
-    """Best path of (N, T, K) logits: repeats merged, blanks dropped."""
-    out = []
-    for row in logits.argmax(-1).tolist():
-        chars, previous = [], 0
-        for k in row:
-            if k != previous and k != 0:
-                chars.append(CHARS[k - 1])
-            previous = k
-        out.append("".join(chars))
-    return out
+    """Best path of (N, T, K) logits: repeats merged, blanks dropped (the runtime's decoding)."""
+    return decode_logits(logits.detach().numpy())
 
 
 def _augmented(line: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -239,6 +222,15 @@ def compare_with_ppocr(folder: Path, weights: Path, limit: int | None = None) ->
             for k in names if k in counts for n, a, b in [counts[k]]}
 
 
+def export_onnx(weights: Path, out: Path) -> None:
+    """The trained net as ONNX (opset 17, any batch size) for :class:`gauged.reader.number_net.NumberNet`."""
+    net = NumberNet()
+    net.load_state_dict(torch.load(weights))
+    net.eval()
+    torch.onnx.export(net, torch.zeros(2, 1, LINE_HEIGHT, LINE_WIDTH), str(out), opset_version=17, input_names=["line"],
+                      output_names=["logits"], dynamic_axes={"line": {0: "n"}, "logits": {0: "n"}}, dynamo=False)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="what", required=True)
@@ -256,9 +248,15 @@ def main(argv: list[str] | None = None) -> int:
     compare.add_argument("--data", type=Path, required=True, help="a gauged synth images folder (labels.jsonl)")
     compare.add_argument("--weights", type=Path, required=True)
     compare.add_argument("--limit", type=int, help="first N images only")
+    export = sub.add_parser("export", help="the trained net as ONNX for the reader")
+    export.add_argument("--weights", type=Path, required=True)
+    export.add_argument("--out", type=Path, default=Path("gauged/models/numbers.onnx"))
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-    if args.what == "compare":
+    if args.what == "export":
+        export_onnx(args.weights, args.out)
+        log.info("exported %s", args.out)
+    elif args.what == "compare":
         for name, row in compare_with_ppocr(args.data, args.weights, args.limit).items():
             print(f"numbers {name:>6} px: {row['numbers']:5d}  PP-OCR {row['ppocr']:.1%}  number net {row['number_net']:.1%}")
     elif args.what == "data":
