@@ -101,8 +101,8 @@ class ReaderConfig(BaseModel):
     ocr_int8_detector: bool = Field(True, description="Run the OCR text detector as the shipped int8 copy of the "
                                     "OCR wheel's float model (2.7x faster, the same readings on the dev sets); "
                                     "false: the float model.")
-    ocr_number_net: bool = Field(True, description="Read every line the OCR recogniser read digits in with the "
-                                 "shipped number net (numbers.onnx) too, and take its number (docs/ocr.md); "
+    ocr_number_net: bool = Field(True, description="When a dial's numbers give no scale, read them again with the "
+                                 "shipped number net (numbers.onnx) too and keep a scale it gives (docs/ocr.md); "
                                  "false: PP-OCR's recogniser alone.")
 
 

@@ -39,28 +39,28 @@ def best_gauge_crop(detector: GaugeDetector, image: np.ndarray, size: int, pad: 
 def crop_logits_in_frame(logits: np.ndarray, crop: Crop, crop_size: int, shape: tuple[int, ...],
                          outside: float = -20.0) -> np.ndarray:
     """A (g, g) logit map over a ``crop_size``-px crop, resampled bilinearly onto the (H, W) frame
-    ``shape[:2]`` it was cut from; frame pixels outside the crop get ``outside``.
-
-    Cell (i, j) covers crop pixels [j s, (j + 1) s) with s = crop_size / g, so its centre lies at
-    crop coordinate (j + 0.5) s, frame coordinate ``crop.to_frame`` of it, and frame pixel index
-    that minus 0.5 (pixel centres at +0.5).
-    """
+    ``shape[:2]`` it was cut from (cells of crop_size / g px, :func:`_cell_to_frame_index`); frame
+    pixels outside the crop get ``outside``."""
     logits = np.asarray(logits, np.float32)
-    step = crop_size / logits.shape[1]
-    scale, x0, y0 = crop.to_frame[0, 0], crop.to_frame[0, 2], crop.to_frame[1, 2]
-    cell_to_frame = np.array([[scale * step, 0.0, x0 + scale * step * 0.5 - 0.5],
-                              [0.0, scale * step, y0 + scale * step * 0.5 - 0.5]])
     height, width = shape[:2]
-    return cv2.warpAffine(logits, cell_to_frame, (width, height), flags=cv2.INTER_LINEAR,
+    return cv2.warpAffine(logits, _cell_to_frame_index(crop, crop_size / logits.shape[1]), (width, height),
+                          flags=cv2.INTER_LINEAR,
                           borderMode=cv2.BORDER_CONSTANT, borderValue=float(outside))
 
 
 def crop_mask(mask: np.ndarray, crop: Crop, crop_size: int) -> np.ndarray:
-    """A (H, W) {0, 1} frame mask cut to ``crop``'s square at ``crop_size`` px (nearest; outside the
-    frame is 0), the label that goes with ``crop.image``."""
-    scale, x0, y0 = crop.to_frame[0, 0], crop.to_frame[0, 2], crop.to_frame[1, 2]
-    crop_to_frame_index = np.array([[scale, 0.0, x0 + 0.5 * scale - 0.5], [0.0, scale, y0 + 0.5 * scale - 0.5]])
+    """A (H, W) {0, 1} frame mask cut to ``crop``'s square at ``crop_size`` px (coverage cut at a half;
+    outside the frame is 0), the label that goes with ``crop.image``."""
     # Coverage by area, then cut at a half: a thin needle keeps its width better than nearest sampling.
-    coverage = cv2.warpAffine(mask.astype(np.float32), crop_to_frame_index, (crop_size, crop_size),
+    coverage = cv2.warpAffine(mask.astype(np.float32), _cell_to_frame_index(crop, 1.0), (crop_size, crop_size),
                               flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
     return (coverage >= 0.5).astype(np.uint8)
+
+
+def _cell_to_frame_index(crop: Crop, step: float) -> np.ndarray:
+    """The 2x3 map from the index of a cell ``step`` crop pixels wide to the frame pixel index under
+    its centre: cell j covers crop pixels [j step, (j + 1) step), centred at crop (j + 0.5) step,
+    frame ``crop.to_frame`` of that, index that minus 0.5 (pixel centres at +0.5)."""
+    scale, x0, y0 = crop.to_frame[0, 0], crop.to_frame[0, 2], crop.to_frame[1, 2]
+    k = scale * step
+    return np.array([[k, 0.0, x0 + 0.5 * k - 0.5], [0.0, k, y0 + 0.5 * k - 0.5]])

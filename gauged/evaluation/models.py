@@ -166,11 +166,9 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
         detector_model: OnnxModel | None = OnnxModel(model_path(DETECTOR_MODEL, models_dir), threads)
     except ModelNotAvailable:
         detector_model = None  # reported as missing rather than failing the crop-model figures
-    # Every ONNX file the reader ships: the two models and the OCR's int8 text detector.
+    # Every ONNX file the reader ships: the two models, the OCR's int8 text detector and the number net.
     files = [m.path for m in (crop, detector_model) if m is not None]
-    for name in (OCR_DET_INT8_MODEL, NUMBER_NET_MODEL):
-        if packaged_model_path(name).is_file():
-            files.append(packaged_model_path(name))
+    files += [p for p in map(packaged_model_path, (OCR_DET_INT8_MODEL, NUMBER_NET_MODEL)) if p.is_file()]
     result: dict = {"files_mb": round(sum(p.stat().st_size for p in files) / 2**20, 2),
                     "files": [p.name for p in files]}
     crop_input = np.zeros((crop.input_size, crop.input_size, 3), np.float32)

@@ -302,10 +302,11 @@ class OcrEngine:
 
     def recognize(self, lines: Sequence[np.ndarray]) -> list[Recognition]:
         """Read each (h, w, 3) uint8 BGR line image (text left to right, upright), each distinct
-        line once: a line in the memo or earlier in ``lines`` is not run through the network again."""
+        line once: a line in the memo or earlier in ``lines`` is not run through the network again.
+        Inside :meth:`reading_numbers_again`, the number net reads the lines too (its readings are
+        not remembered: the memo holds PP-OCR's, which the retry reuses)."""
         memo = self._memo
-        again = self.numbers_again
-        keys = [(again, *_line_key(line)) for line in lines]
+        keys = [_line_key(line) for line in lines]
         fresh: dict[tuple, int] = {}  # lines not in the memo: key -> index of the first such line
         for i, key in enumerate(keys):
             if key not in memo and key not in fresh:
@@ -322,7 +323,7 @@ class OcrEngine:
             memo.update(read)
             while len(memo) > self.memo_size:
                 memo.popitem(last=False)
-        return out
+        return self._numbers_read_again(lines, out) if self.numbers_again else out
 
     def run_recogniser(self, lines: Sequence[np.ndarray]) -> list[Recognition]:
         """The recogniser network on every line, in batches of lines of similar aspect (no memo)."""
@@ -348,8 +349,7 @@ class OcrEngine:
                     sub[:, self._minus_fold[1]] = 0.0
                 logp = np.log(np.clip(sub / np.maximum(sub.sum(axis=1, keepdims=True), 1e-12), 1e-9, 1.0))
                 out[i] = Recognition(text.strip(), score, digits, dscore, logp.astype(np.float32))
-        read = [r for r in out if r is not None]
-        return self._numbers_read_again(lines, read) if self.number_net is not None and self.numbers_again else read
+        return [r for r in out if r is not None]
 
     @property
     def numbers_again(self) -> bool:
@@ -359,7 +359,7 @@ class OcrEngine:
     @contextmanager
     def reading_numbers_again(self) -> Iterator[None]:
         """Within the block, this thread's lines that PP-OCR reads digits in are read by the number net
-        too (:meth:`_numbers_read_again`); the memo keeps the two kinds of reading apart."""
+        too (:meth:`_numbers_read_again`)."""
         if self.number_net is None:
             raise RuntimeError("this engine has no number net")
         before = self.numbers_again

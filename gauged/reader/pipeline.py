@@ -263,6 +263,23 @@ class GaugeReader:
             result.value = value
         return result
 
+    def _number_net_retry(self, crop: Crop, arc: ScaleArc, number_points: np.ndarray, detail: np.ndarray | None,
+                          hints: np.ndarray, timer: _Timer
+                          ) -> tuple[tuple[list[ScaleMarker], str | None], list[ScaleModel]] | None:
+        """The markers, unit and scales of the dial read again with the number net, which misreads
+        half as many small numbers as PP-OCR (docs/ocr.md), or None. Only a refused scale gets this
+        read, and the refusal stands unless the scale stage accepts what it reads and the scale does
+        not cross zero: the net drops minus signs."""
+        with timer("ocr"):
+            again = self.ocr.read_markers_by_number_net(crop.image, arc, number_points, detail)
+        if isinstance(again, StageFailure):
+            return None
+        with timer("scale"):
+            scales = fit_scales(arc, again[0], again[1], hints=hints)
+        if isinstance(scales, StageFailure) or _across_zero(scales[0]):
+            return None
+        return again, scales
+
     def _detail(self, image: np.ndarray, crop: Crop) -> np.ndarray | None:
         """The crop's square region at up to :data:`DETAIL_SIZE` px when the frame has that much more
         detail than the model's crop: scale numbers are small, and OCR reads them far better from the
@@ -313,17 +330,9 @@ class GaugeReader:
             with timer("scale"):
                 scales = fit_scales(arc, result.markers, unit, hints=hints)
             if isinstance(scales, StageFailure) and scales.stage == "scale" and self.ocr.has_number_net:
-                # The numbers read gave no scale: read them again with the number net, which misreads
-                # half as many small numbers as PP-OCR (docs/ocr.md). Only refusals get this read,
-                # and the refusal stands unless the scale stage accepts what it reads.
-                with timer("ocr"):
-                    again = self.ocr.read_markers_by_number_net(crop.image, arc, numbers.points, detail)
-                if not isinstance(again, StageFailure):
-                    with timer("scale"):
-                        retry = fit_scales(arc, again[0], again[1], hints=hints)
-                    # The net drops minus signs: a retried scale across zero is not trusted (docs/ocr.md).
-                    if not isinstance(retry, StageFailure) and not _across_zero(retry[0]):
-                        (result.markers, unit), scales = again, retry
+                retried = self._number_net_retry(crop, arc, numbers.points, detail, hints, timer)
+                if retried is not None:
+                    (result.markers, unit), scales = retried
         result.unit = unit
         if isinstance(scales, StageFailure) and scales.stage in SECOND_LOOK:
             # The numbers read gave no scale: look again for the grid the ring's texts most likely
