@@ -90,7 +90,7 @@ def test_the_engine_takes_the_nets_numbers_only_inside_its_block():
         assert engine.numbers_again
         inside = engine.recognize(lines)
     assert not engine.numbers_again
-    outside = engine.recognize(lines)  # the memo keeps the two kinds of reading apart
+    outside = engine.recognize(lines)  # the memo holds PP-OCR's readings only
     assert [r.digits for r in outside] == [r.digits for r in plain.recognize(lines)]
     for pp, again, by_net in zip(outside, inside, net.read(lines)):
         takes = bool(pp.digits) and bool(by_net) and not isinstance(parse_number(by_net), StageFailure)
