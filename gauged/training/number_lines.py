@@ -141,15 +141,26 @@ def exact_by_height(net: NumberNet, lines: np.ndarray, texts: np.ndarray, height
     return out
 
 
-def train_number_net(data: Path, val: Path, epochs: int, out: Path, batch: int = 64, lr: float = 2e-3,
-                     threads: int = 2, seed: int = 0) -> dict[str, float]:
-    """Train on ``data`` lines, keep the checkpoint best on ``val`` (legible share) at ``out``."""
+def train_number_net(data: list[Path], val: Path, epochs: int, out: Path, batch: int = 64, lr: float = 2e-3,
+                     threads: int = 2, seed: int = 0, repeats: list[int] | None = None, init: Path | None = None,
+                     empty_lines: bool = False) -> dict[str, float]:
+    """Train on the lines of every ``data`` file (file ``k`` taken ``repeats[k]`` times per epoch), keep
+    the checkpoint best on ``val`` (legible share) at ``out``. ``init`` starts from a checkpoint;
+    with ``empty_lines``, lines labelled "" (no number there: a tick, a ghost box) are learnt as
+    reading nothing."""
     torch.set_num_threads(threads)
     torch.manual_seed(seed)
-    train_set, val_set = np.load(data), np.load(val)
-    keep = np.array([len(encode(t)) > 0 for t in train_set["t"]])
-    lines, texts = train_set["x"][keep], train_set["t"][keep]
+    val_set = np.load(val)
+    parts = [np.load(path) for path in data]
+    repeats = repeats or [1] * len(parts)
+    lines = np.concatenate([np.repeat(part["x"], n, axis=0) for part, n in zip(parts, repeats, strict=True)])
+    texts = np.concatenate([np.repeat(part["t"].astype(str), n) for part, n in zip(parts, repeats, strict=True)])
+    keep = np.array([len(encode(t)) > 0 or (empty_lines and t == "") for t in texts])
+    lines, texts = lines[keep], texts[keep]
+    log.info("%d training lines (%d read as nothing)", len(lines), int(sum(t == "" for t in texts)))
     net = NumberNet()
+    if init is not None:
+        net.load_state_dict(torch.load(init))
     optimiser = torch.optim.AdamW(net.parameters(), lr, weight_decay=1e-4)
     steps = epochs * (len(lines) // batch)
     schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, lr, total_steps=steps, pct_start=0.1)
@@ -165,7 +176,7 @@ def train_number_net(data: Path, val: Path, epochs: int, out: Path, batch: int =
             x = torch.from_numpy(np.stack([_augmented(lines[j], rng) for j in pick])[:, None] / 255.0).float()
             labels = [encode(texts[j]) for j in pick]
             logp = net(x).log_softmax(-1).transpose(0, 1)  # (T, N, K)
-            loss = F.ctc_loss(logp, torch.tensor([c for label in labels for c in label]),
+            loss = F.ctc_loss(logp, torch.tensor([c for label in labels for c in label], dtype=torch.long),
                               torch.full((len(pick),), logp.shape[0], dtype=torch.long),
                               torch.tensor([len(label) for label in labels]), zero_infinity=True)
             optimiser.zero_grad()
@@ -238,9 +249,19 @@ def main(argv: list[str] | None = None) -> int:
     data.add_argument("--seed", type=int, required=True, help="first seed (keep clear of the evaluation sets' seeds)")
     data.add_argument("--count", type=int, required=True, help="crops to render")
     data.add_argument("--out", type=Path, required=True)
+    reader = sub.add_parser("reader-lines", help="the reader's own recogniser lines of a synth images folder, "
+                            "labelled from its truth -> .npz (gauged.training.reader_lines)")
+    reader.add_argument("--data", type=Path, required=True, help="a gauged synth images folder (labels.jsonl)")
+    reader.add_argument("--out", type=Path, required=True)
+    reader.add_argument("--workers", type=int, default=2)
     fit = sub.add_parser("train", help="train the number net")
-    fit.add_argument("--data", type=Path, required=True)
+    fit.add_argument("--data", type=Path, nargs="+", required=True,
+                     help="line files: `data`'s true-quad lines and/or `reader-lines`' lines of the reader's own views")
+    fit.add_argument("--repeats", type=int, nargs="+", help="times each --data file is taken per epoch (default 1 each)")
     fit.add_argument("--val", type=Path, required=True)
+    fit.add_argument("--init", type=Path, help="start from this checkpoint (fine-tuning)")
+    fit.add_argument("--lr", type=float, default=2e-3)
+    fit.add_argument("--empty-lines", action="store_true", help="learn lines labelled '' as reading nothing")
     fit.add_argument("--epochs", type=int, default=6)
     fit.add_argument("--out", type=Path, required=True, help="checkpoint of the best epoch")
     fit.add_argument("--threads", type=int, default=2)
@@ -259,10 +280,19 @@ def main(argv: list[str] | None = None) -> int:
     elif args.what == "compare":
         for name, row in compare_with_ppocr(args.data, args.weights, args.limit).items():
             print(f"numbers {name:>6} px: {row['numbers']:5d}  PP-OCR {row['ppocr']:.1%}  number net {row['number_net']:.1%}")
+    elif args.what == "reader-lines":
+        from gauged.training.reader_lines import write_reader_lines
+
+        why = write_reader_lines(args.data, args.out, args.workers, progress=log.info)
+        log.info("lines seen: %s", json.dumps(dict(why)))
     elif args.what == "data":
         log.info("wrote %d number lines to %s", write_lines(args.seed, args.count, args.out), args.out)
     else:
-        log.info("best: %s", json.dumps(train_number_net(args.data, args.val, args.epochs, args.out, threads=args.threads)))
+        if args.repeats and len(args.repeats) != len(args.data):
+            parser.error("--repeats needs one count per --data file")
+        best = train_number_net(args.data, args.val, args.epochs, args.out, lr=args.lr, threads=args.threads,
+                                repeats=args.repeats, init=args.init, empty_lines=args.empty_lines)
+        log.info("best: %s", json.dumps(best))
     return 0
 
 

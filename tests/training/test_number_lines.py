@@ -37,7 +37,7 @@ def test_training_writes_the_best_checkpoint(tmp_path):
     lines = rng.integers(0, 255, (len(texts), LINE_HEIGHT, LINE_WIDTH), dtype=np.uint8)
     heights = np.full(len(texts), 12.0, np.float32)
     np.savez(tmp_path / "d.npz", x=lines, t=texts, h=heights)
-    best = train_number_net(tmp_path / "d.npz", tmp_path / "d.npz", 1, tmp_path / "best.pt", batch=16, threads=1)
+    best = train_number_net([tmp_path / "d.npz"], tmp_path / "d.npz", 1, tmp_path / "best.pt", batch=16, threads=1)
     assert 0.0 <= best["legible"] <= 1.0 and set(best) >= {"10-14", "legible"}
     net = NumberNet()
     net.load_state_dict(torch.load(tmp_path / "best.pt"))
