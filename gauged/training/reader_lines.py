@@ -38,6 +38,7 @@ MIN_COVER = 0.95  # share of the number's true quad the line must hold
 MAX_AREA = 5.0  # line area / true quad area at most (more: a box over neighbours too)
 MAX_TURN_DEG = 30.0  # the line's reading direction against the number's
 NEAR_TEXT = 3.0  # a line within this many text heights of a printed text is not "nothing"
+FIELDS = ("x", "t", "h", "ppocr_text", "ppocr_score", "ppocr_digits", "ppocr_digits_score", "image")
 
 
 @dataclass
@@ -161,7 +162,7 @@ def _read_folder(job: tuple[str, int, int]) -> dict:
     folder, start, stop = Path(job[0]), job[1], job[2]
     records = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][start:stop]
     reader = build_reader(ReaderConfig(threads=1))
-    out: dict = {"x": [], "t": [], "h": [], "ppocr": [], "ppocr_score": [], "image": [], "why": Counter()}
+    out: dict = {key: [] for key in FIELDS} | {"why": Counter()}
     for record in records:
         image = cv2.imread(str(folder / record["image"]))
         if image is None:
@@ -179,15 +180,18 @@ def _read_folder(job: tuple[str, int, int]) -> dict:
             out["x"].append(to_line_input(line))
             out["t"].append(label)
             out["h"].append(height * record.get("render_scale", 1.0))
-            out["ppocr"].append(reading.digits if reading is not None else "")
-            out["ppocr_score"].append(reading.digits_score if reading is not None else 0.0)
+            out["ppocr_text"].append(reading.text if reading is not None else "")
+            out["ppocr_score"].append(reading.score if reading is not None else 0.0)
+            out["ppocr_digits"].append(reading.digits if reading is not None else "")
+            out["ppocr_digits_score"].append(reading.digits_score if reading is not None else 0.0)
             out["image"].append(record["image"])
     return out
 
 
 def write_reader_lines(folder: Path, out: Path, workers: int = 2, chunk: int = 100, progress=print) -> Counter:
-    """Every labelled line the reader recognises on ``folder``'s renders, to ``out`` (.npz: ``x`` lines,
-    ``t`` labels, ``h`` number heights as captured, and PP-OCR's digits and score per line)."""
+    """Every labelled line the reader recognises on ``folder``'s renders, to ``out`` (.npz, :data:`FIELDS`:
+    ``x`` lines, ``t`` labels, ``h`` number heights as captured, PP-OCR's readings of the line, the
+    image's name). Returns how many lines were seen of each kind (:func:`label_line`'s why)."""
     count = sum(1 for _ in (folder / "labels.jsonl").open())
     jobs = [(str(folder), s, min(s + chunk, count)) for s in range(0, count, chunk)]
     parts, why = [], Counter()
@@ -198,7 +202,9 @@ def write_reader_lines(folder: Path, out: Path, workers: int = 2, chunk: int = 1
             progress(f"read {min(done * chunk, count)}/{count} images, {sum(len(p['t']) for p in parts)} lines kept")
     if not any(p["t"] for p in parts):
         raise ValueError(f"no labelled lines in {folder}")
-    arrays = {k: np.concatenate([np.asarray(p[k]) for p in parts if p["t"]]) for k in ("x", "t", "h", "ppocr", "ppocr_score", "image")}
+    arrays = {k: np.concatenate([np.asarray(p[k]) for p in parts if p["t"]]) for k in FIELDS}
+    for k in ("h", "ppocr_score", "ppocr_digits_score"):
+        arrays[k] = arrays[k].astype(np.float32)
     out.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(out, **{**arrays, "h": arrays["h"].astype(np.float32), "ppocr_score": arrays["ppocr_score"].astype(np.float32)})
+    np.savez_compressed(out, **arrays)
     return why
