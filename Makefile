@@ -6,7 +6,9 @@ BIN    := $(VENV)/bin
 # gauged runs with its own onnxruntime code (gauged/reader/ocr_engine.py). --no-deps: none of the
 # package's Python dependencies (downloaders, config libraries) is used.
 OCR_PACKAGE := rapidocr==3.10.0
-# Re-install whenever pyproject.toml changes.
+# Re-install whenever pyproject.toml or constraints.txt changes. constraints.txt pins every package to the
+# versions the suite passes with (a newer OpenCV or onnxruntime changes JPEG bytes and OCR readings).
+CONSTRAINTS := constraints.txt
 RUN_STAMP  := $(VENV)/.installed-run
 TEST_STAMP := $(VENV)/.installed-test
 
@@ -22,14 +24,14 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-$(RUN_STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e .
+$(RUN_STAMP): pyproject.toml $(CONSTRAINTS) | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -c $(CONSTRAINTS) -e .
 	$(BIN)/python -m pip install --quiet --no-deps $(OCR_PACKAGE)
 	@touch $@
 
 # The suite includes a training smoke test, so the test install has the train extra (CPU torch).
-$(TEST_STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,train]"
+$(TEST_STAMP): pyproject.toml $(CONSTRAINTS) | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -c $(CONSTRAINTS) -e ".[test,train]"
 	$(BIN)/python -m pip install --quiet --no-deps $(OCR_PACKAGE)
 	@touch $@ $(RUN_STAMP)
 
