@@ -18,6 +18,7 @@ import numpy as np
 from gauged.reader.crop import Crop, crop_gauge
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.ellipse import ScaleArc, fit_scale_arc
+from gauged.reader.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
 from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
 from gauged.reader.needle import NeedleReading, fit_needle
@@ -59,6 +60,13 @@ class ScaleTextReader(Protocol):
     def reread_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
                        ) -> list[ScaleMarker] | None:
         """A second look after the scale stage refused ``read_markers``' numbers: other markers, or None."""
+
+    @property
+    def has_number_net(self) -> bool:
+        """Whether the number net is there (:meth:`hint_markers` and the retry need it)."""
+
+    def hint_markers(self, frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers) -> list[ScaleMarker] | None:
+        """A last look: the numbers the number net reads at the number peaks, or None."""
 
 
 @dataclass(frozen=True)
@@ -280,6 +288,25 @@ class GaugeReader:
             return None
         return again, scales
 
+    def _hint_look(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, unit: str | None,
+                   hints: np.ndarray, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | None:
+        """The scales of the numbers the number net reads at the crop model's number peaks
+        (:mod:`gauged.reader.hint_numbers`), or None: a last look at a dial whose text the OCR could
+        not read. The refusal stands unless the scale stage accepts these numbers, and their scale
+        does not cross zero (the net drops minus signs)."""
+        if not self.ocr.has_number_net:
+            return None
+        with timer("ocr"):
+            markers = self.ocr.hint_markers(image, crop, arc, keypoints.numbers)
+        if not markers:
+            return None
+        with timer("scale"):
+            scales = fit_scales(arc, markers, unit, min_inliers=MIN_HINT_NUMBERS, hints=hints)
+        if isinstance(scales, StageFailure) or _across_zero(scales[0]):
+            return None
+        result.markers, result.unit = markers, unit
+        return scales
+
     def _detail(self, image: np.ndarray, crop: Crop) -> np.ndarray | None:
         """The crop's square region at up to :data:`DETAIL_SIZE` px when the frame has that much more
         detail than the model's crop: scale numbers are small, and OCR reads them far better from the
@@ -323,7 +350,7 @@ class GaugeReader:
             read = self.ocr.read_markers(crop.image, arc, numbers.points, detail)
         if isinstance(read, StageFailure):
             if read.reason != NO_NUMBERS:
-                return read
+                return self._hint_look(image, crop, keypoints, arc, None, hints, result, timer) or read
             unit, scales = None, read  # texts but no number: the second look below may find some
         else:
             result.markers, unit = read
@@ -346,7 +373,7 @@ class GaugeReader:
                 if not isinstance(retry, StageFailure):
                     result.markers, scales = again, retry
         if isinstance(scales, StageFailure):
-            return scales
+            return self._hint_look(image, crop, keypoints, arc, unit, hints, result, timer) or scales
         if primary_unit and len(scales) > 1:
             scales.sort(key=lambda s: s.unit != primary_unit)
         return scales
