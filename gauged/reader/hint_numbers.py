@@ -90,15 +90,18 @@ def hint_markers(frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks, n
     centre = crop.points_to_frame(np.asarray([arc.centre], float))[0]
     scale_radius = math.sqrt(arc.ellipse.a * arc.ellipse.b) * crop.scale
     outward = (at - centre) / np.maximum(np.linalg.norm(at - centre, axis=1, keepdims=True), 1e-9)
-    best: _Guess | None = None
+    guesses = []  # the windows of every guess, read by the net in one batch
     for orientation in ORIENTATIONS:
+        ups = outward if orientation == "radial" else np.tile([0.0, -1.0], (len(at), 1))
         for fraction in HEIGHTS:
             height = fraction * scale_radius
-            ups = outward if orientation == "radial" else np.tile([0.0, -1.0], (len(at), 1))
-            quads = [window_quad(p, WINDOW[0] * height, WINDOW[1] * height, up) for p, up in zip(at, ups, strict=True)]
-            guess = _read_guess(net.read([crop_quad(frame, q) for q in quads]), quads, angles, radius, crop)
-            if guess is not None and (best is None or guess.rank() > best.rank()):
-                best = guess
+            guesses.append([window_quad(p, WINDOW[0] * height, WINDOW[1] * height, up) for p, up in zip(at, ups, strict=True)])
+    texts = net.read([crop_quad(frame, q) for quads in guesses for q in quads])
+    best: _Guess | None = None
+    for k, quads in enumerate(guesses):
+        guess = _read_guess(texts[k * len(at): (k + 1) * len(at)], quads, angles, radius, crop)
+        if guess is not None and (best is None or guess.rank() > best.rank()):
+            best = guess
     return best.markers if best is not None and best.agreeing >= MIN_NUMBERS else None
 
 
