@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 
 from gauged.config.model import ReaderConfig  # noqa: E402
 from gauged.reader.factory import NUMBER_NET_MODEL, build_reader  # noqa: E402
-from gauged.reader.hint_numbers import HEIGHTS, ORIENTATIONS, WINDOW, window_quad  # noqa: E402
+from gauged.reader.hint_numbers import HEIGHTS, ORIENTATIONS, WIDTHS, WINDOW_HEIGHT, window_quad  # noqa: E402
 from gauged.reader.number_net import NumberNet  # noqa: E402
 from gauged.reader.numbers import parse_number  # noqa: E402
 from gauged.reader.ocr_engine import crop_quad  # noqa: E402
@@ -74,9 +74,9 @@ def main() -> int:
                 continue
             on_numbers += 1
             outward = (p - centre) / max(float(np.linalg.norm(p - centre)), 1e-9)
-            lines = [crop_quad(image, window_quad(p, WINDOW[0] * f * radius, WINDOW[1] * f * radius,
+            lines = [crop_quad(image, window_quad(p, WINDOW_HEIGHT * f * radius, w * f * radius,
                                                   outward if o == "radial" else np.array([0.0, -1.0])))
-                     for o in ORIENTATIONS for f in HEIGHTS]
+                     for o in ORIENTATIONS for f in HEIGHTS for w in WIDTHS]
             parsed = [parse_number(t) for t in net.read(lines)]
             readable += any(not isinstance(n, StageFailure) and n.value == values[0] for n in parsed)
     print(f"{len(chosen)} refused renders ({', '.join(args.reasons)}), numbers captured >= 5 px")

@@ -43,7 +43,8 @@ from gauged.types import ScaleMarker, StageFailure
 
 HEIGHTS = (0.06, 0.075, 0.095, 0.12, 0.15)  # number heights tried, in radii of the scale ellipse
 ORIENTATIONS = ("upright", "radial")
-WINDOW = (1.5, 3.3)  # window height and width, in number heights (the net's lines have a margin)
+WINDOW_HEIGHT = 1.5  # in number heights: the net's lines have a margin above and below
+WIDTHS = (3.3,)  # window widths tried, in number heights
 BAND = (0.55, 1.45)  # normalised radii where scale numbers sit (gauged.reader.ellipse.NUMBER_BAND)
 MIN_NUMBERS = 4  # agreeing numbers the look needs (the first reading's scale needs 3)
 RING_WIDTH = 0.15  # normalised radii: one scale's numbers are printed at one radius
@@ -93,9 +94,10 @@ def hint_markers(frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks, n
     guesses = []  # the windows of every guess, read by the net in one batch
     for orientation in ORIENTATIONS:
         ups = outward if orientation == "radial" else np.tile([0.0, -1.0], (len(at), 1))
-        for fraction in HEIGHTS:
-            height = fraction * scale_radius
-            guesses.append([window_quad(p, WINDOW[0] * height, WINDOW[1] * height, up) for p, up in zip(at, ups, strict=True)])
+        for height in HEIGHTS:
+            for width in WIDTHS:
+                size = height * scale_radius
+                guesses.append([window_quad(p, WINDOW_HEIGHT * size, width * size, up) for p, up in zip(at, ups, strict=True)])
     texts = net.read([crop_quad(frame, q) for quads in guesses for q in quads])
     best: _Guess | None = None
     for k, quads in enumerate(guesses):
