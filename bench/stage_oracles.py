@@ -77,7 +77,9 @@ class Truth:
 
 
 class TrueOcr:
-    """The OCR stage answering with the labelled numbers."""
+    """The OCR stage answering with the labelled numbers (no number net: no retry, no last look)."""
+
+    has_number_net = False
 
     def __init__(self, truth: Truth) -> None:
         self.truth = truth

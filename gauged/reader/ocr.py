@@ -43,8 +43,10 @@ import numpy as np
 from gauged.geometry.angles import unwrap, wrap_to_pi
 from gauged.geometry.dial_frame import dial_angle
 from gauged.geometry.rectify import rectifying_homography, unrectify_points, warp_rectified
+from gauged.reader.crop import Crop
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.hint_numbers import hint_markers
+from gauged.reader.keypoints import Peaks
 from gauged.reader.likely_scale import RingText, likely_markers
 from gauged.reader.numbers import filter_progression, merge_fragments, parse_number
 from gauged.reader.number_net import NumberNet
@@ -348,7 +350,7 @@ class ScaleTextReader:
     def has_number_net(self) -> bool:
         return self.engine.number_net is not None
 
-    def hint_markers(self, frame: np.ndarray, crop, arc: ScaleArc, numbers) -> list[ScaleMarker] | None:
+    def hint_markers(self, frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks) -> list[ScaleMarker] | None:
         """The numbers the number net reads at the crop model's number peaks ``numbers`` (crop px) in
         ``frame`` (:func:`gauged.reader.hint_numbers.hint_markers`), or None; None without the net."""
         if self.engine.number_net is None:

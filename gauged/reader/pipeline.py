@@ -18,9 +18,9 @@ import numpy as np
 from gauged.reader.crop import Crop, crop_gauge
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.ellipse import ScaleArc, fit_scale_arc
-from gauged.reader.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
-from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
+from gauged.reader.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
+from gauged.reader.keypoints import CropKeypoints, Peaks, decode_crop_maps
 from gauged.reader.needle import NeedleReading, fit_needle
 from gauged.reader.ocr import NO_NUMBERS
 from gauged.reader.onnx_model import OnnxModel, to_model_input
@@ -65,7 +65,7 @@ class ScaleTextReader(Protocol):
     def has_number_net(self) -> bool:
         """Whether the number net is there (:meth:`hint_markers` and the retry need it)."""
 
-    def hint_markers(self, frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers) -> list[ScaleMarker] | None:
+    def hint_markers(self, frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks) -> list[ScaleMarker] | None:
         """A last look: the numbers the number net reads at the number peaks, or None."""
 
 
