@@ -31,6 +31,10 @@ class Crop:
         pts = np.asarray(points, float).reshape(-1, 2)
         return pts * self.to_frame[0, 0] + self.to_frame[:2, 2]
 
+    def points_to_crop(self, points: np.ndarray) -> np.ndarray:
+        """Inverse of :meth:`points_to_frame`: frame pixels (N, 2) -> crop pixels."""
+        return (np.asarray(points, float).reshape(-1, 2) - self.to_frame[:2, 2]) / self.to_frame[0, 0]
+
 
 def square_box(box: Box, pad: float) -> Box:
     """The square of side ``max(w, h) * (1 + 2 pad)`` centred on ``box``."""

@@ -91,6 +91,11 @@ class ScaleArc:
         out = wrap_to_pi(corrected)
         return float(out) if np.ndim(angle) == 0 else np.asarray(out)
 
+    def number_angles(self, points: np.ndarray) -> np.ndarray:
+        """Dial angles of scale numbers at ``points`` (N, 2) px: :meth:`linear`, then :meth:`on_notches`,
+        the frame the needle's angle is read in."""
+        return self.on_notches(self.linear(dial_angle(self.ellipse, points, self.centre)))
+
     def on_notches(self, angle: np.ndarray) -> np.ndarray:
         """:meth:`linear` angles of scale numbers moved onto the major notch each one labels.
 

@@ -31,10 +31,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from gauged.geometry.angles import unwrap
-from gauged.geometry.dial_frame import dial_angle, normalized_radius
+from gauged.geometry.dial_frame import normalized_radius
 from gauged.geometry.scale_fit import fit_angle_value
 from gauged.reader.crop import Crop
-from gauged.reader.ellipse import ScaleArc
+from gauged.reader.ellipse import NUMBER_BAND, ScaleArc
 from gauged.reader.keypoints import Peaks
 from gauged.reader.number_net import NumberNet
 from gauged.reader.numbers import parse_number
@@ -45,7 +45,6 @@ HEIGHTS = (0.06, 0.075, 0.095, 0.12, 0.15)  # number heights tried, in radii of 
 ORIENTATIONS = ("upright", "radial")
 WINDOW_HEIGHT = 1.5  # in number heights: the net's lines have a margin above and below
 WIDTHS = (3.3,)  # window widths tried, in number heights
-BAND = (0.55, 1.45)  # normalised radii where scale numbers sit (gauged.reader.ellipse.NUMBER_BAND)
 MIN_NUMBERS = 4  # agreeing numbers the look needs (the first reading's scale needs 3)
 RING_WIDTH = 0.15  # normalised radii: one scale's numbers are printed at one radius
 # A number as printed: no stray minus before a lone 0 ("-0": a tick or the needle beside it), no
@@ -58,9 +57,12 @@ class _Guess:
     """The numbers read at the peaks under one guess of size and orientation, and their line."""
 
     markers: list[ScaleMarker]
-    agreeing: int
     characters: int
     rms_angle: float
+
+    @property
+    def agreeing(self) -> int:
+        return len(self.markers)
 
     def rank(self) -> tuple[int, int, float]:
         return self.agreeing, self.characters, -self.rms_angle
@@ -82,11 +84,11 @@ def hint_markers(frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks, n
     if not len(numbers):
         return None
     radius = normalized_radius(arc.ellipse, numbers.points)
-    near = (radius >= BAND[0]) & (radius <= BAND[1])
+    near = (radius >= NUMBER_BAND[0]) & (radius <= NUMBER_BAND[1])
     peaks, radius = numbers.points[near], radius[near]
     if len(peaks) < MIN_NUMBERS:
         return None
-    angles = np.asarray(unwrap(arc.on_notches(arc.linear(dial_angle(arc.ellipse, peaks, arc.centre))), arc.zero_angle))
+    angles = np.asarray(unwrap(arc.number_angles(peaks), arc.zero_angle))
     at = crop.points_to_frame(peaks)
     centre = crop.points_to_frame(np.asarray([arc.centre], float))[0]
     scale_radius = math.sqrt(arc.ellipse.a * arc.ellipse.b) * crop.scale
@@ -95,8 +97,8 @@ def hint_markers(frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks, n
     for orientation in ORIENTATIONS:
         ups = outward if orientation == "radial" else np.tile([0.0, -1.0], (len(at), 1))
         for height in HEIGHTS:
+            size = height * scale_radius
             for width in WIDTHS:
-                size = height * scale_radius
                 guesses.append([window_quad(p, WINDOW_HEIGHT * size, width * size, up) for p, up in zip(at, ups, strict=True)])
     texts = net.read([crop_quad(frame, q) for quads in guesses for q in quads])
     best: _Guess | None = None
@@ -126,8 +128,8 @@ def _read_guess(texts: list[str], quads: list[np.ndarray], angles: np.ndarray, r
     markers, characters = [], 0
     for (k, text, value), inlier in zip(read, fit.inliers, strict=True):
         if inlier and abs(radii[k] - ring) <= RING_WIDTH / 2:
-            quad = (np.asarray(quads[k], float) - crop.to_frame[:2, 2]) / crop.scale
+            quad = crop.points_to_crop(quads[k])
             (x0, y0), (x1, y1) = quad.min(axis=0), quad.max(axis=0)
             markers.append(ScaleMarker(text, value, (float(x0), float(y0), float(x1), float(y1))))
             characters += len(text)
-    return _Guess(markers, len(markers), characters, fit.rms_angle)
+    return _Guess(markers, characters, fit.rms_angle)

@@ -352,9 +352,8 @@ class ScaleTextReader:
 
     def hint_markers(self, frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks) -> list[ScaleMarker] | None:
         """The numbers the number net reads at the crop model's number peaks ``numbers`` (crop px) in
-        ``frame`` (:func:`gauged.reader.hint_numbers.hint_markers`), or None; None without the net."""
-        if self.engine.number_net is None:
-            return None
+        ``frame`` (:func:`gauged.reader.hint_numbers.hint_markers`), or None. Needs the number net
+        (:attr:`has_number_net`)."""
         return hint_markers(frame, crop, arc, numbers, self.engine.number_net)
 
     def read_markers_by_number_net(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray,

@@ -64,7 +64,7 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
     # Number angles in the same corrected frame as the needle's (ScaleArc.linear), on their notches.
     markers = list(markers)
     if markers:
-        angles = arc.on_notches(arc.linear(dial_angle(arc.ellipse, marker_centres(markers), arc.centre)))
+        angles = arc.number_angles(marker_centres(markers))
         markers = [replace(m, angle=float(a)) for m, a in zip(markers, angles, strict=True)]
     rings = number_rings(arc.ellipse, markers)
     if not rings:
