@@ -116,6 +116,16 @@ class CropNet(nn.Module):
         for name, parameter in self.named_parameters():
             parameter.requires_grad = name.startswith("needle_branch.")
 
+    def deepen_needle_branch(self) -> None:
+        """Give the needle branch its own stride-16 -> 8 block too (a copy of the shared ``up8``), so it
+        decodes from the encoder's deepest features instead of the shared decoder's stride-8 output:
+        deciding which dark stroke is the pointing part takes more than the stride-8 features."""
+        if self.needle_branch is None:
+            raise ValueError("deepen_needle_branch needs a needle branch: call add_needle_branch first")
+        self.needle_branch.up8 = copy.deepcopy(self.up8)
+        for name, parameter in self.named_parameters():
+            parameter.requires_grad = name.startswith("needle_branch.") or not self.trunk_frozen
+
     def unfreeze(self) -> None:
         """Train every weight again (the trunk too): a net fine-tuned so is a needle model of its own,
         since its keypoint maps drift from the file it started from."""
@@ -141,7 +151,8 @@ class CropNet(nn.Module):
 
 class NeedleBranch(nn.Module):
     """The needle mask's own decoder from the shared stride-8 features: up4, up2 and a one-channel
-    head, initialised as copies of the shared decoder (its needle output row)."""
+    head, initialised as copies of the shared decoder (its needle output row). With ``up8`` (see
+    :meth:`CropNet.deepen_needle_branch`) it starts from the encoder's stride-16 features instead."""
 
     def __init__(self, up4: _UpBlock, up2: _UpBlock, head: nn.Sequential):
         super().__init__()
@@ -152,8 +163,11 @@ class NeedleBranch(nn.Module):
             out.weight.copy_(last.weight[-1:])
             out.bias.copy_(last.bias[-1:])
         self.head = nn.Sequential(copy.deepcopy(head[0]), out)
+        self.up8: _UpBlock | None = None
 
     def forward(self, y8: torch.Tensor, f: dict[int, torch.Tensor]) -> torch.Tensor:
+        if self.up8 is not None:
+            y8 = self.up8(f[16], f[8])
         return self.head(self.up2(self.up4(y8, f[4]), f[2]))
 
 

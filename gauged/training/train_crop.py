@@ -86,13 +86,28 @@ def make_batches(shards, size: int, batch: int, seed: int, weights: list[float],
 def has_needle_branch(init: Path) -> bool:
     """Whether the ``--init`` file is a crop model with a needle decoder of its own (an ONNX export
     whose metadata says so, or a checkpoint holding ``needle_branch.`` weights)."""
+    return _branch_kind(init) is not None
+
+
+def has_deep_needle_branch(init: Path) -> bool:
+    """Whether the ``--init`` file's needle branch has its own stride-16 -> 8 block (``--needle-branch-up8``)."""
+    return _branch_kind(init) == "up8"
+
+
+def _branch_kind(init: Path) -> str | None:
+    """None (no branch), "up4" (the branch starts from the shared stride-8 features) or "up8"."""
     if init.suffix == ".onnx":
         import onnx
 
         meta = {p.key: p.value for p in onnx.load(str(init), load_external_data=False).metadata_props}
-        return bool(json.loads(meta.get("gauged", "{}")).get("needle_branch"))
+        settings = json.loads(meta.get("gauged", "{}"))
+        if not settings.get("needle_branch"):
+            return None
+        return "up8" if settings.get("needle_branch_up8") else "up4"
     state = torch.load(init, map_location="cpu", weights_only=False)["model"]
-    return any(key.startswith("needle_branch.") for key in state)
+    if not any(key.startswith("needle_branch.") for key in state):
+        return None
+    return "up8" if any(key.startswith("needle_branch.up8.") for key in state) else "up4"
 
 
 def _loss(model, batch):
@@ -198,10 +213,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--needle-branch", action="store_true",
                         help="after --init (a net without a branch), give the needle mask its own decoder and "
                              "train only that (the keypoint maps stay exactly as they were)")
+    parser.add_argument("--needle-branch-up8", action="store_true",
+                        help="with --needle-branch: the branch gets its own stride-16 -> 8 block as well "
+                             "(a copy of the shared one), so it decodes from the encoder's deepest features")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
     if args.needle_branch and not args.init:
         parser.error("--needle-branch trains a branch off a trained net: give that net with --init")
+    if args.needle_branch_up8 and not args.needle_branch:
+        parser.error("--needle-branch-up8 deepens the needle branch: give --needle-branch too")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     torch.set_num_threads(args.threads)
     torch.manual_seed(args.seed)
@@ -218,6 +238,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--init {args.init} has a needle branch: continue it with --needle-branch")
     if init_has_branch:
         model.add_needle_branch()  # before loading, so the export's convolutions match the net's
+        if has_deep_needle_branch(args.init):
+            model.deepen_needle_branch()
     if args.init:
         from gauged.training.from_onnx import initialise
 
@@ -225,6 +247,8 @@ def main(argv: list[str] | None = None) -> int:
             [augmented(shards[0].sample(i), args.size, None, 0.0)[0] for i in range(min(48, len(shards[0])))]))))
     if args.needle_branch and not init_has_branch:
         model.add_needle_branch()
+    if args.needle_branch_up8 and model.needle_branch.up8 is None:
+        model.deepen_needle_branch()
     if args.needle_branch and args.train_all:
         model.unfreeze()
     if args.needle_branch:
@@ -246,7 +270,9 @@ def main(argv: list[str] | None = None) -> int:
                                                     "channels": list(CROP_CHANNELS), "metrics": best,
                                                     "init": str(args.init) if args.init else ("scratch" if args.scratch else "imagenet"),
                                                     "needle_dilate_px": args.needle_dilate_px,
-                                                    "needle_branch": args.needle_branch})
+                                                    "needle_branch": args.needle_branch,
+                                                    "needle_branch_up8": model.needle_branch is not None
+                                                    and model.needle_branch.up8 is not None})
         log.info("exported %s", args.export)
     return 0
 

@@ -85,3 +85,44 @@ def test_train_crop_knows_an_init_with_a_needle_branch(tmp_path):
         torch.save({"model": net.state_dict()}, tmp_path / f"{name}.pt")
         assert has_needle_branch(tmp_path / f"{name}.onnx") is branch
         assert has_needle_branch(tmp_path / f"{name}.pt") is branch
+
+
+def test_train_crop_tells_a_deepened_needle_branch_from_a_plain_one(tmp_path):
+    from gauged.training.train_crop import has_deep_needle_branch, has_needle_branch
+
+    plain, deep = _trained_looking(4), _trained_looking(4)
+    plain.add_needle_branch()
+    deep.add_needle_branch()
+    deep.deepen_needle_branch()
+    for net, name, is_deep in ((plain, "plain", False), (deep, "deep", True)):
+        net.eval()
+        export_onnx(net, SIZE, tmp_path / f"{name}.onnx",
+                    {"kind": "crop", "size": SIZE, "stride": 2, "needle_branch": True, "needle_branch_up8": is_deep})
+        torch.save({"model": net.state_dict()}, tmp_path / f"{name}.pt")
+        for path in (tmp_path / f"{name}.onnx", tmp_path / f"{name}.pt"):
+            assert has_needle_branch(path) and has_deep_needle_branch(path) is is_deep
+
+
+def test_a_deepened_needle_branch_reloads_from_its_export_when_built_deep(tmp_path):
+    original = _trained_looking(5)
+    original.add_needle_branch()
+    original.deepen_needle_branch()
+    with torch.no_grad():  # trained: the branch's own up8 no longer equals the shared one
+        for p in original.needle_branch.parameters():
+            p.add_(0.05 * torch.randn_like(p))
+    original.eval()
+    export_onnx(original, SIZE, tmp_path / "crop.onnx", {"kind": "crop", "size": SIZE, "stride": 2})
+    rng = np.random.default_rng(6)
+    calibration = torch.from_numpy(rng.random((16, 3, SIZE, SIZE), dtype=np.float32))
+    probe = torch.from_numpy(rng.random((2, 3, SIZE, SIZE), dtype=np.float32))
+    shallow = CropNet(SIZE, pretrained=False, width=16)
+    shallow.add_needle_branch()
+    with pytest.raises(ValueError, match="convolutions"):
+        load_from_onnx(shallow, tmp_path / "crop.onnx", calibration)
+    rebuilt = CropNet(SIZE, pretrained=False, width=16)
+    rebuilt.add_needle_branch()
+    rebuilt.deepen_needle_branch()
+    load_from_onnx(rebuilt, tmp_path / "crop.onnx", calibration)
+    rebuilt.eval()
+    with torch.no_grad():
+        assert torch.allclose(rebuilt(probe), original(probe), atol=1e-4)

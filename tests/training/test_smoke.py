@@ -131,6 +131,33 @@ def test_needle_branch_starts_as_the_shared_decoder_and_trains_only_the_needle()
     assert (after[:, -1] - before[:, -1]).abs().mean() > 1e-3  # the needle's branch learnt
 
 
+def test_a_deepened_needle_branch_decodes_from_stride_16_and_still_trains_only_the_needle():
+    torch.manual_seed(1)
+    model = CropNet(SIZE, pretrained=False, width=16).eval()
+    x = torch.rand(2, 3, SIZE, SIZE)
+    with torch.no_grad():
+        before = model(x)
+    with pytest.raises(ValueError, match="add_needle_branch"):
+        model.deepen_needle_branch()
+    model.add_needle_branch()
+    model.deepen_needle_branch()
+    with torch.no_grad():
+        assert torch.allclose(model(x), before, atol=1e-6)  # its up8 is a copy too
+    assert {name.split(".")[0] for name, p in model.named_parameters() if p.requires_grad} == {"needle_branch"}
+    assert any(name.startswith("needle_branch.up8.") and p.requires_grad for name, p in model.named_parameters())
+    optimizer = torch.optim.AdamW([p for p in model.parameters() if p.requires_grad], lr=1e-2)
+    model.train()
+    for _ in range(3):
+        optimizer.zero_grad()
+        model(x)[:, -1].sigmoid().mean().backward()
+        optimizer.step()
+    model.eval()
+    with torch.no_grad():
+        after = model(x)
+    assert torch.equal(after[:, :-1], before[:, :-1])  # keypoint maps untouched
+    assert not torch.equal(model.needle_branch.up8.fuse[0].weight, model.up8.fuse[0].weight)  # its own block learnt
+
+
 def test_an_unfrozen_needle_branch_trains_the_trunk_too():
     model = CropNet(SIZE, pretrained=False, width=16)
     model.add_needle_branch()
