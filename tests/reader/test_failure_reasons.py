@@ -254,6 +254,23 @@ def test_scale_not_covered_when_consistent_numbers_leave_an_end_far_away():
     assert scales[0].min_value == pytest.approx(0, abs=0.05) and scales[0].max_value == pytest.approx(10, abs=0.05)
 
 
+def test_numbers_past_ends_when_the_line_puts_its_own_numbers_beyond_the_scale():
+    """0, 1000, 2000 read in the gap before the start, mid-scale and in the gap after the end of a
+    120-degree scale (distractor texts across a dial, held-out 000516) agree on a line, but that line
+    puts 0 and 2000 far outside the range it gives the scale (600..1400): refused. The printed
+    numbers of the dial fit as before."""
+    dial = Dial(start_deg=210.0, span_deg=120.0, majors=5)
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    across = [_marker(dial, dial.start_deg + k * step, v) for k, v in ((-3, 0), (2, 1000), (7, 2000))]
+    failure = assert_failure(fit_scales(arc, across), "scale", "numbers_past_ends")
+    assert "0..2000" in failure.detail and "600..1400" in failure.detail
+    printed = [_marker(dial, dial.start_deg + k * step, k) for k in (0, 1, 2, 4)]
+    scales = fit_scales(arc, printed)
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].min_value == pytest.approx(0, abs=0.05) and scales[0].max_value == pytest.approx(4, abs=0.05)
+
+
 def test_four_or_more_agreeing_numbers_may_leave_an_end_three_steps_away_not_four():
     """3..7 of a 0..10 dial (the numbers near both ends unread) leave each end three steps off: five
     numbers at one step carry the line that far. 3..6 leave the top end four steps off: refused."""

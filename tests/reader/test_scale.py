@@ -121,6 +121,21 @@ def test_a_letter_read_as_a_digit_does_not_make_the_third_agreeing_number():
     assert "read as digits" in failure.detail
 
 
+def test_one_number_read_twice_does_not_make_the_third_agreeing_number():
+    """Two boxes read "0" at one printed "0" beside "5" (held-out 000744, 176% off): three markers agree
+    on a line but only two printed numbers do, too few, so it is refused; with more numbers it is a scale."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    values = [5.0 * v for v in range(6)]
+    zero, five, fifteen, twenty_five = _ring(DIAL, values, 0.8, [0, 1, 3, 5])
+    x0, y0, x1, y1 = zero.box
+    twice = [zero, ScaleMarker("0", 0.0, (x0 + 3, y0 + 1, x1 + 3, y1 + 1)), five]
+    failure = fit_scales(arc, twice)
+    assert isinstance(failure, StageFailure) and failure.reason == "too_few_inliers"
+    assert "2 distinct values" in failure.detail
+    scales = fit_scales(arc, twice + [fifteen, twenty_five])
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].max_value == pytest.approx(25.0, abs=0.05)
+
 def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
     """10, 150, 200 of a 0..300 dial ("50" misread "10" near the line): the differences 140 and 50
     are no multiples of one step, so the bent line is refused."""
