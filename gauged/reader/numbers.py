@@ -21,6 +21,7 @@ Example:
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Sequence
@@ -70,8 +71,15 @@ def _too_few(detail: str) -> StageFailure:
     return StageFailure(stage="ocr", reason="too_few_numbers", detail=detail)
 
 
+PARSE_MEMO = 4096  # distinct strings remembered: a dial's passes parse the same few hundred strings again and again
+
+
+@functools.lru_cache(maxsize=PARSE_MEMO)
 def parse_number(text: str) -> ParsedNumber | StageFailure:
     """Parse one OCR string as a scale number, or say why it is not one.
+
+    Pure, and its results are frozen, so each distinct string is parsed once (:data:`PARSE_MEMO`):
+    the OCR and scale stages asked it about 360 times per dial, 9 ms of a cold read.
 
     Accepts decimals with ``.`` or ``,`` (``1,000`` with a non-zero integer part is one thousand),
     minus as ``-``, ``−``, ``–``, ``—``, ``~`` or ``_``, a leading ``+``, trailing tick debris (``16-``,
