@@ -25,7 +25,7 @@ import numpy as np
 from gauged.config.model import ReaderConfig
 from gauged.evaluation.readings import image_path, load_labels
 from gauged.reader.factory import build_reader
-from gauged.reader.numbers import read_as_digits
+from gauged.reader.scale import agreeing_digit_values
 
 
 def evidence(folder: Path, threads: int) -> list[dict]:
@@ -37,7 +37,7 @@ def evidence(folder: Path, threads: int) -> list[dict]:
         reads = reader.read_image(image) if image is not None else []
         if isinstance(reads, list) and reads and reads[0].value is not None and reads[0].scale is not None:
             scale = reads[0].scale
-            values = sorted({m.value for m in scale.markers if m.inlier and read_as_digits(m.text)})
+            values = sorted(set(agreeing_digit_values(scale)))
             low, high = sorted((scale.min_value, scale.max_value))
             past = max(low - values[0], values[-1] - high, 0.0) if values else 0.0
             rows.append({"image": label.image, "error": abs(reads[0].value.value - label.reading) / (label.max - label.min),

@@ -183,14 +183,15 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
     # A letter taken for a digit does not count towards the minimum: "S" read as 5 beside "15, 25"
     # (a 0..2.5 bar render whose decimal points all went unread) made three agreeing numbers of a
     # line 10x too steep, 516% off (held-out 000958). The dev sets lost no reading to this rule.
-    digits = sum(1 for m in model.markers if m.inlier and read_as_digits(m.text))
+    values = agreeing_digit_values(model)
+    digits = len(values)
     if digits < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers read as digits, need {min_inliers}")
     # Nor does one number read twice: two boxes read "0" at one "0.05", beside "0.1", made a line
     # through two printed numbers, -0.25..0.10 for a 0..0.25 dial, 176% off (held-out 000744; with
     # 000810, 6.9% off, the only reads of 1,308 on the dev, fresh, held-out and real sets with fewer
     # than three distinct agreeing values).
-    distinct = len({m.value for m in model.markers if m.inlier and read_as_digits(m.text)})
+    distinct = len(set(values))
     if distinct < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers but {distinct} distinct values, need {min_inliers}")
     for check in (_irregular, _past_ends, _uncovered, _dropped_decimal_point, _rival):
@@ -198,6 +199,12 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
         if failure is not None:
             return failure
     return model
+
+
+def agreeing_digit_values(model: ScaleModel) -> list[float]:
+    """The values of ``model``'s agreeing numbers that OCR read as digits (no letter taken for one):
+    the evidence the scale checks weigh."""
+    return [m.value for m in model.markers if m.inlier and read_as_digits(m.text)]
 
 
 def _rival(model: ScaleModel) -> StageFailure | None:
@@ -259,7 +266,7 @@ def _past_ends(model: ScaleModel) -> StageFailure | None:
     not the scale's: "1", "1000" and "2000" read from distractor text across an upside-down 0..6 dial
     made a scale of 744..1231 and answered 1132 for 4.65 (held-out 000516).
     """
-    values = [m.value for m in model.markers if m.inlier and read_as_digits(m.text)]
+    values = agreeing_digit_values(model)
     if not values:
         return None
     low, high = sorted((model.min_value, model.max_value))
@@ -282,7 +289,7 @@ def _uncovered(model: ScaleModel) -> StageFailure | None:
     values = sorted({m.value for m in model.markers if m.inlier})
     # Numbers read as digits are the evidence; a letter taken for a digit is not: "S" read as 5 beside
     # "15, 20, 25" (a 0.5..2.5 scale whose decimal points all went unread) "covered" the low end.
-    digits = sorted({m.value for m in model.markers if m.inlier and read_as_digits(m.text)})
+    digits = sorted(set(agreeing_digit_values(model)))
     values = digits if len(digits) >= 2 else values
     if len(values) < 2:
         return None

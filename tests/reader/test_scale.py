@@ -136,6 +136,7 @@ def test_one_number_read_twice_does_not_make_the_third_agreeing_number():
     assert not isinstance(scales, StageFailure), scales
     assert scales[0].max_value == pytest.approx(25.0, abs=0.05)
 
+
 def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
     """10, 150, 200 of a 0..300 dial ("50" misread "10" near the line): the differences 140 and 50
     are no multiples of one step, so the bent line is refused."""
