@@ -33,10 +33,26 @@ def mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor) -
     return ((bce + dice) * valid).sum() / valid.sum().clamp(min=1.0)
 
 
-def crop_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor) -> dict[str, torch.Tensor]:
-    """Total crop-model loss: heatmap focal loss on channels 0..C-2, mask loss on the last channel."""
+def upsampled_mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor, factor: int) -> torch.Tensor:
+    """:func:`mask_loss` where the mask is judged: ``logits`` (N, H, W) resized bilinearly ``factor``
+    times (cell centres aligned, as ``needle_mask_at`` resizes them at evaluation) against the
+    coverage ``target`` resized the same way and cut at 0.5, a binary mask. On a coverage target a
+    cell half covered by a thin needle or its tapering tip is taught "0.5", which the evaluation's
+    cut at 0.5 then drops; here each pixel of the needle is taught "needle"."""
+    up = F.interpolate(logits[:, None], scale_factor=factor, mode="bilinear", align_corners=False)[:, 0]
+    binary = (F.interpolate(target[:, None], scale_factor=factor, mode="bilinear", align_corners=False)[:, 0] > 0.5)
+    return mask_loss(up, binary.to(up.dtype), valid)
+
+
+def crop_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor,
+              needle_upsample: int = 1) -> dict[str, torch.Tensor]:
+    """Total crop-model loss: heatmap focal loss on channels 0..C-2, mask loss on the last channel
+    (on the coverage grid, or with ``needle_upsample`` > 1 by :func:`upsampled_mask_loss`)."""
     heat = focal_heatmap_loss(logits[:, :-1], target[:, :-1], valid[:, :-1])
-    needle = mask_loss(logits[:, -1], target[:, -1], valid[:, -1])
+    if needle_upsample > 1:
+        needle = upsampled_mask_loss(logits[:, -1], target[:, -1], valid[:, -1], needle_upsample)
+    else:
+        needle = mask_loss(logits[:, -1], target[:, -1], valid[:, -1])
     return {"loss": heat + needle, "heat": heat.detach(), "needle": needle.detach()}
 
 

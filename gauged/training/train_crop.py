@@ -12,6 +12,7 @@ validation shard, needle IoU and direction on the real validation photos.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import logging
 import time
@@ -110,9 +111,9 @@ def _branch_kind(init: Path) -> str | None:
     return "up8" if any(key.startswith("needle_branch.up8.") for key in state) else "up4"
 
 
-def _loss(model, batch):
+def _loss(model, batch, needle_upsample: int = 1):
     x, target, valid = batch
-    return crop_loss(model(x), target, valid)
+    return crop_loss(model(x), target, valid, needle_upsample)
 
 
 def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> dict[str, float]:
@@ -216,6 +217,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--needle-branch-up8", action="store_true",
                         help="with --needle-branch: the branch gets its own stride-16 -> 8 block as well "
                              "(a copy of the shared one), so it decodes from the encoder's deepest features")
+    parser.add_argument("--needle-loss-upsample", type=int, default=1, metavar="N",
+                        help="judge the needle mask N times finer than the output grid, as a binary mask "
+                             "(losses.upsampled_mask_loss); 1: on the coverage grid")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
     if args.needle_branch and not args.init:
@@ -259,7 +263,8 @@ def main(argv: list[str] | None = None) -> int:
              args.init or ("scratch" if args.scratch else "ImageNet"), [len(s) for s in shards])
     steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch
     started = time.monotonic()
-    best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights, args.needle_dilate_px), steps, _loss,
+    best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights, args.needle_dilate_px), steps,
+                 functools.partial(_loss, needle_upsample=args.needle_loss_upsample),
                  lambda m: validate_crop(m, synth_val, real_val, args.size),
                  TrainSettings(epochs=args.epochs, lr=args.lr), args.run)
     log.info("best: %s (%.0f min)", json.dumps(best), (time.monotonic() - started) / 60)
@@ -270,6 +275,7 @@ def main(argv: list[str] | None = None) -> int:
                                                     "channels": list(CROP_CHANNELS), "metrics": best,
                                                     "init": str(args.init) if args.init else ("scratch" if args.scratch else "imagenet"),
                                                     "needle_dilate_px": args.needle_dilate_px,
+                                                    "needle_loss_upsample": args.needle_loss_upsample,
                                                     "needle_branch": args.needle_branch,
                                                     "needle_branch_up8": model.needle_branch is not None
                                                     and model.needle_branch.up8 is not None})
