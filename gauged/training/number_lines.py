@@ -112,6 +112,11 @@ class NumberNet(nn.Module):
         return self.out(self.rnn(f)[0])
 
 
+def width_of(state: dict[str, torch.Tensor]) -> int:
+    """The ``width`` a :class:`NumberNet` checkpoint was built with (its first convolution's channels)."""
+    return int(state["features.0.0.weight"].shape[0])
+
+
 def greedy_decode(logits: torch.Tensor) -> list[str]:
     """Best path of (N, T, K) logits: repeats merged, blanks dropped (the runtime's decoding)."""
     return decode_logits(logits.detach().numpy())
@@ -143,11 +148,11 @@ def exact_by_height(net: NumberNet, lines: np.ndarray, texts: np.ndarray, height
 
 def train_number_net(data: list[Path], val: Path, epochs: int, out: Path, batch: int = 64, lr: float = 2e-3,
                      threads: int = 2, seed: int = 0, repeats: list[int] | None = None, init: Path | None = None,
-                     empty_lines: bool = False) -> dict[str, float]:
+                     empty_lines: bool = False, width: int = 48) -> dict[str, float]:
     """Train on the lines of every ``data`` file (file ``k`` taken ``repeats[k]`` times per epoch), keep
     the checkpoint best on ``val`` (legible share) at ``out``. ``init`` starts from a checkpoint;
     with ``empty_lines``, lines labelled "" (no number there: a tick, a ghost box) are learnt as
-    reading nothing."""
+    reading nothing. ``width`` sets the net's channels (:class:`NumberNet`; its cost grows as the square)."""
     torch.set_num_threads(threads)
     torch.manual_seed(seed)
     val_set = np.load(val)
@@ -158,9 +163,10 @@ def train_number_net(data: list[Path], val: Path, epochs: int, out: Path, batch:
     keep = np.array([len(encode(t)) > 0 or (empty_lines and t == "") for t in texts])
     lines, texts = lines[keep], texts[keep]
     log.info("%d training lines (%d read as nothing)", len(lines), int(sum(t == "" for t in texts)))
-    net = NumberNet()
-    if init is not None:
-        net.load_state_dict(torch.load(init))
+    state = torch.load(init) if init is not None else None
+    net = NumberNet(width_of(state) if state is not None else width)
+    if state is not None:
+        net.load_state_dict(state)
     optimiser = torch.optim.AdamW(net.parameters(), lr, weight_decay=1e-4)
     steps = epochs * (len(lines) // batch)
     schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, lr, total_steps=steps, pct_start=0.1)
@@ -206,8 +212,9 @@ def compare_with_ppocr(folder: Path, weights: Path, limit: int | None = None) ->
         parsed = parse_number(text)
         return None if isinstance(parsed, StageFailure) else parsed.value
 
-    engine, net = OcrEngine(threads=2), NumberNet()
-    net.load_state_dict(torch.load(weights))
+    state = torch.load(weights)
+    engine, net = OcrEngine(threads=2), NumberNet(width_of(state))
+    net.load_state_dict(state)
     net.eval()
     counts: dict[str, list[int]] = {}
     records = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][:limit]
@@ -235,8 +242,9 @@ def compare_with_ppocr(folder: Path, weights: Path, limit: int | None = None) ->
 
 def export_onnx(weights: Path, out: Path) -> None:
     """The trained net as ONNX (opset 17, any batch size) for :class:`gauged.reader.number_net.NumberNet`."""
-    net = NumberNet()
-    net.load_state_dict(torch.load(weights))
+    state = torch.load(weights)
+    net = NumberNet(width_of(state))
+    net.load_state_dict(state)
     net.eval()
     torch.onnx.export(net, torch.zeros(2, 1, LINE_HEIGHT, LINE_WIDTH), str(out), opset_version=17, input_names=["line"],
                       output_names=["logits"], dynamic_axes={"line": {0: "n"}, "logits": {0: "n"}}, dynamo=False)
@@ -265,6 +273,8 @@ def main(argv: list[str] | None = None) -> int:
     fit.add_argument("--epochs", type=int, default=6)
     fit.add_argument("--out", type=Path, required=True, help="checkpoint of the best epoch")
     fit.add_argument("--threads", type=int, default=2)
+    fit.add_argument("--width", type=int, default=48, help="the net's first-layer channels (48: the shipped net; "
+                     "the cost per line grows as its square; an --init checkpoint keeps its own)")
     compare = sub.add_parser("compare", help="PP-OCR's recogniser and the net on a synthetic set's true number quads")
     compare.add_argument("--data", type=Path, required=True, help="a gauged synth images folder (labels.jsonl)")
     compare.add_argument("--weights", type=Path, required=True)
@@ -291,7 +301,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.repeats and len(args.repeats) != len(args.data):
             parser.error("--repeats needs one count per --data file")
         best = train_number_net(args.data, args.val, args.epochs, args.out, lr=args.lr, threads=args.threads,
-                                repeats=args.repeats, init=args.init, empty_lines=args.empty_lines)
+                                repeats=args.repeats, init=args.init, empty_lines=args.empty_lines,
+                                width=args.width)
         log.info("best: %s", json.dumps(best))
     return 0
 

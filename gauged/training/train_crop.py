@@ -53,14 +53,19 @@ def widened_needle(sample: CropSample, pixels: int) -> CropSample:
     return CropSample(sample.image, sample.points, cv2.dilate(sample.needle, kernel), sample.source)
 
 
-def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One training example: (3, S, S) float32 input, (C, S/2, S/2) targets, (C,) validity."""
+def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength: float, colour_swap: float = 0.0
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One training example: (3, S, S) float32 input, (C, S/2, S/2) targets, (C,) validity. With
+    probability ``colour_swap`` the image's colour channels are shuffled first (a black needle stays
+    black, a red one may turn blue): the engine paints few needle colours, real dials more."""
     if strength > 0:
         matrix = random_affine(size, rng, max_rotation_deg=180 * strength,
                                scale_range=(1 - 0.15 * strength, 1 + 0.1 * strength), max_shift=0.05 * strength)
     else:
         matrix = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     image = photometric(warp_image(sample.image, matrix, size), rng) if strength > 0 else sample.image
+    if colour_swap > 0 and rng.random() < colour_swap:
+        image = np.ascontiguousarray(image[:, :, rng.permutation(3)])
     needle = None if sample.needle is None else warp_image(sample.needle, matrix, size, nearest=True)
     points = {name: (None if sample.points.get(name) is None else warp_points(np.asarray(sample.points[name]), matrix))
               for name in HEATMAPS}
@@ -69,7 +74,8 @@ def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength:
     return np.ascontiguousarray(x), target, valid
 
 
-def make_batches(shards, size: int, batch: int, seed: int, weights: list[float], needle_dilate_px: int = 0):
+def make_batches(shards, size: int, batch: int, seed: int, weights: list[float], needle_dilate_px: int = 0,
+                 colour_swap: float = 0.0):
     def batches(epoch: int):
         rng = np.random.default_rng(seed * 1000 + epoch)
         entries = []
@@ -78,7 +84,7 @@ def make_batches(shards, size: int, batch: int, seed: int, weights: list[float],
             entries += [(index, int(i)) for i in picks]
         order = rng.permutation(len(entries))
         for start in range(0, len(order) - batch + 1, batch):
-            xs, ts, vs = zip(*(augmented(widened_needle(shards[s].sample(i), needle_dilate_px), size, rng, 1.0) for s, i in (entries[k] for k in order[start:start + batch])))
+            xs, ts, vs = zip(*(augmented(widened_needle(shards[s].sample(i), needle_dilate_px), size, rng, 1.0, colour_swap) for s, i in (entries[k] for k in order[start:start + batch])))
             x = torch.from_numpy(np.stack(xs)).contiguous(memory_format=torch.channels_last)
             yield x, torch.from_numpy(np.stack(ts)), torch.from_numpy(np.stack(vs))
     return batches
@@ -220,6 +226,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--needle-loss-upsample", type=int, default=1, metavar="N",
                         help="judge the needle mask N times finer than the output grid, as a binary mask "
                              "(losses.upsampled_mask_loss); 1: on the coverage grid")
+    parser.add_argument("--colour-swap", type=float, default=0.0, metavar="P",
+                        help="shuffle each training image's colour channels with probability P (needle colours)")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
     if args.needle_branch and not args.init:
@@ -263,7 +271,8 @@ def main(argv: list[str] | None = None) -> int:
              args.init or ("scratch" if args.scratch else "ImageNet"), [len(s) for s in shards])
     steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch
     started = time.monotonic()
-    best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights, args.needle_dilate_px), steps,
+    best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights, args.needle_dilate_px,
+                                    args.colour_swap), steps,
                  functools.partial(_loss, needle_upsample=args.needle_loss_upsample),
                  lambda m: validate_crop(m, synth_val, real_val, args.size),
                  TrainSettings(epochs=args.epochs, lr=args.lr), args.run)
@@ -276,6 +285,7 @@ def main(argv: list[str] | None = None) -> int:
                                                     "init": str(args.init) if args.init else ("scratch" if args.scratch else "imagenet"),
                                                     "needle_dilate_px": args.needle_dilate_px,
                                                     "needle_loss_upsample": args.needle_loss_upsample,
+                                                    "colour_swap": args.colour_swap,
                                                     "needle_branch": args.needle_branch,
                                                     "needle_branch_up8": model.needle_branch is not None
                                                     and model.needle_branch.up8 is not None})

@@ -44,6 +44,27 @@ def test_training_writes_the_best_checkpoint(tmp_path):
     assert exact_by_height(net, lines, texts, heights)["legible"] == best["legible"]
 
 
+def test_a_narrower_net_trains_and_exports_at_its_own_width(tmp_path):
+    from gauged.reader.number_net import NumberNet as RuntimeNumberNet
+    from gauged.training.number_lines import export_onnx, width_of
+
+    rng = np.random.default_rng(1)
+    texts = np.array(["10", "-5", "0.5", "200"] * 8)
+    lines = rng.integers(0, 255, (len(texts), LINE_HEIGHT, LINE_WIDTH), dtype=np.uint8)
+    np.savez(tmp_path / "d.npz", x=lines, t=texts, h=np.full(len(texts), 12.0, np.float32))
+    train_number_net([tmp_path / "d.npz"], tmp_path / "d.npz", 1, tmp_path / "narrow.pt", batch=16, threads=1, width=16)
+    state = torch.load(tmp_path / "narrow.pt")
+    assert width_of(state) == 16 and state["features.0.0.weight"].numel() < NumberNet().features[0][0].weight.numel()
+    export_onnx(tmp_path / "narrow.pt", tmp_path / "narrow.onnx")
+    net = NumberNet(16)
+    net.load_state_dict(state)
+    net.eval()
+    line = np.ascontiguousarray(np.repeat(lines[0][:, :, None], 3, axis=2))  # the runtime takes BGR lines
+    with torch.no_grad():
+        expected = greedy_decode(net(torch.from_numpy(lines[:1, None].astype(np.float32) / 255.0)))
+    assert RuntimeNumberNet(tmp_path / "narrow.onnx", threads=1).read([line]) == expected
+
+
 def test_compare_counts_every_main_scale_number_for_both_recognisers(tmp_path):
     import subprocess
     import sys
