@@ -178,3 +178,20 @@ def test_an_unfrozen_needle_branch_trains_the_trunk_too():
     model.eval()
     with torch.no_grad():
         assert (model(x)[:, :-1] - before[:, :-1]).abs().mean() > 1e-4  # the keypoint maps drift with the trunk
+
+
+def test_colour_swap_shuffles_the_image_channels_and_leaves_the_targets_alone():
+    sample = tiny_sample(np.random.default_rng(3))
+    sample = CropSample(np.dstack([np.full((SIZE, SIZE), v, np.uint8) for v in (10, 120, 240)]), sample.points,
+                        sample.needle, "smoke")
+    x0, t0, v0 = augmented(sample, SIZE, np.random.default_rng(5), 0.0)
+    orders = set()
+    for seed in range(12):
+        x, t, v = augmented(sample, SIZE, np.random.default_rng(seed), 0.0, colour_swap=1.0)
+        assert np.array_equal(t, t0) and np.array_equal(v, v0)
+        means = tuple(np.round(x.mean(axis=(1, 2)) * 255).astype(int))
+        assert sorted(means) == sorted(np.round(x0.mean(axis=(1, 2)) * 255).astype(int))
+        orders.add(means)
+    assert len(orders) > 1  # the channels really move
+    x, _, _ = augmented(sample, SIZE, np.random.default_rng(0), 0.0, colour_swap=0.0)
+    assert np.array_equal(x, x0)
