@@ -33,7 +33,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     readings.add_argument("--data", type=Path, required=True, help="folder with labels.json or labels.jsonl")
     readings.add_argument("--json", action="store_true", help="print the full result as JSON")
     readings.add_argument("--threads", type=int, default=2)
-    readings.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models")
+    readings.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models "
+                               "(and numbers.onnx/ocr_det_int8.onnx, where it holds them)")
     readings.set_defaults(func=run_readings)
     models = sub.add_parser(
         "models", help="detector and crop-model metrics on the real sets (and synthetic crops)",
@@ -46,7 +47,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="rendered close-ups with labels.jsonl (gauged synth images --kind crop): detector figures")
     models.add_argument("--json", action="store_true")
     models.add_argument("--threads", type=int, default=2)
-    models.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models")
+    models.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models "
+                               "(and numbers.onnx/ocr_det_int8.onnx, where it holds them)")
     models.set_defaults(func=run_models)
     recording = sub.add_parser(
         "recording", help="readings of a replay against a synthetic recording's truth channel",

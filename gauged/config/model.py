@@ -97,7 +97,8 @@ class ReaderConfig(BaseModel):
     threads: int = Field(2, ge=1, le=64, description="onnxruntime intra-op threads per model.")
     min_confidence: float = Field(0.5, ge=0, le=1, description="Readings below this confidence are refused.")
     models_dir: Path | None = Field(None, description="Folder whose crop.onnx/detector.onnx replace the shipped "
-                                    "models (a candidate model under evaluation); unset: the shipped ones.")
+                                    "models (a candidate model under evaluation), and whose numbers.onnx/"
+                                    "ocr_det_int8.onnx do where it holds them; unset: the shipped ones.")
     ocr_int8_detector: bool = Field(True, description="Run the OCR text detector as the shipped int8 copy of the "
                                     "OCR wheel's float model (2.7x faster, the same readings on the dev sets); "
                                     "false: the float model.")

@@ -24,6 +24,14 @@ def model_path(name: str, models_dir: Path | None = None) -> Path:
     return Path(models_dir) / name if models_dir is not None else packaged_model_path(name)
 
 
+def ocr_model_path(name: str, models_dir: Path | None = None) -> Path:
+    """The OCR's own model file (the number net, the int8 text detector): ``models_dir/name`` when a
+    candidate folder holds one, else the shipped file, so a folder with a candidate crop model alone
+    is read with the shipped OCR."""
+    candidate = model_path(name, models_dir)
+    return candidate if models_dir is not None and candidate.is_file() else packaged_model_path(name)
+
+
 def build_reader(config: ReaderConfig) -> GaugeReader:
     """The reader; raises :class:`ModelNotAvailable` when the crop model is missing.
 
@@ -40,8 +48,8 @@ def build_reader(config: ReaderConfig) -> GaugeReader:
 
     try:
         ocr = ScaleTextReader(threads=config.threads,
-                              int8_detector=packaged_model_path(OCR_DET_INT8_MODEL) if config.ocr_int8_detector else None,
-                              number_net=packaged_model_path(NUMBER_NET_MODEL) if config.ocr_number_net else None)
+                              int8_detector=ocr_model_path(OCR_DET_INT8_MODEL, config.models_dir) if config.ocr_int8_detector else None,
+                              number_net=ocr_model_path(NUMBER_NET_MODEL, config.models_dir) if config.ocr_number_net else None)
     except OcrUnavailable as exc:  # OCR is optional when every gauge has a configured scale
         log.warning("OCR is not available (%s): gauges without a configured scale cannot be read", exc)
         ocr = None

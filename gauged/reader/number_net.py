@@ -52,6 +52,7 @@ class NumberNet:
 
         if not path.is_file():
             raise ModelNotAvailable(f"model file {path} is missing: train and export it (docs/ocr.md)")
+        self.path = path
         self.session = ort.InferenceSession(str(path), session_options(threads), providers=["CPUExecutionProvider"])
 
     def read(self, lines: Sequence[np.ndarray]) -> list[str]:
