@@ -28,8 +28,9 @@ def ocr_model_path(name: str, models_dir: Path | None = None) -> Path:
     """The OCR's own model file (the number net, the int8 text detector): ``models_dir/name`` when a
     candidate folder holds one, else the shipped file, so a folder with a candidate crop model alone
     is read with the shipped OCR."""
-    candidate = model_path(name, models_dir)
-    return candidate if models_dir is not None and candidate.is_file() else packaged_model_path(name)
+    if models_dir is not None and (Path(models_dir) / name).is_file():
+        return Path(models_dir) / name
+    return packaged_model_path(name)
 
 
 def build_reader(config: ReaderConfig) -> GaugeReader:
