@@ -4,13 +4,13 @@ The reader reads numbers with PP-OCR's recogniser (:mod:`gauged.reader.ocr_engin
 dial again with this net (exported to ``gauged/models/numbers.onnx``, run by
 :mod:`gauged.reader.number_net`) only when its first numbers gave no scale.
 Cut at their true quads, PP-OCR reads 71.2% of the held-out numbers captured 5-10 px tall and 87.8%
-of those 10-14 px; this net, trained on number lines of other seeds cut the same way, reads 85.9%
-and 93.5% (docs/ocr.md, "A recogniser of our own").
+of those 10-14 px; this net (its first, width-48 version), trained on number lines of other seeds
+cut the same way, reads 85.9% and 93.5% (docs/ocr.md, "A recogniser of our own").
 
     python -m gauged.training.number_lines data --seed 2000000 --count 6000 --out data/num-train.npz
     python -m gauged.training.number_lines data --seed 2100000 --count 300 --out data/num-val.npz
     python -m gauged.training.number_lines train --data data/num-train.npz --val data/num-val.npz \\
-        --epochs 6 --out runs/numbers/best.pt
+        --epochs 10 --width 24 --out runs/numbers/best.pt   # the shipped net (defaults); 3-4 min an epoch
     python -m gauged.training.number_lines compare --data data/held1000 --weights runs/numbers/best.pt
     python -m gauged.training.number_lines export --weights runs/numbers/best.pt --out gauged/models/numbers.onnx
 
@@ -94,7 +94,7 @@ def write_lines(first_seed: int, count: int, out: Path, workers: int = 2) -> int
 class NumberNet(nn.Module):
     """(N, 1, 32, 128) grey in [0, 1] -> (N, 32, len(CHARS) + 1) CTC logits (blank first)."""
 
-    def __init__(self, width: int = 48):
+    def __init__(self, width: int = 24):
         super().__init__()
 
         def block(cin: int, cout: int) -> nn.Sequential:
@@ -148,7 +148,7 @@ def exact_by_height(net: NumberNet, lines: np.ndarray, texts: np.ndarray, height
 
 def train_number_net(data: list[Path], val: Path, epochs: int, out: Path, batch: int = 64, lr: float = 2e-3,
                      threads: int = 2, seed: int = 0, repeats: list[int] | None = None, init: Path | None = None,
-                     empty_lines: bool = False, width: int = 48) -> dict[str, float]:
+                     empty_lines: bool = False, width: int = 24) -> dict[str, float]:
     """Train on the lines of every ``data`` file (file ``k`` taken ``repeats[k]`` times per epoch), keep
     the checkpoint best on ``val`` (legible share) at ``out``. ``init`` starts from a checkpoint;
     with ``empty_lines``, lines labelled "" (no number there: a tick, a ghost box) are learnt as
@@ -270,10 +270,10 @@ def main(argv: list[str] | None = None) -> int:
     fit.add_argument("--init", type=Path, help="start from this checkpoint (fine-tuning)")
     fit.add_argument("--lr", type=float, default=2e-3)
     fit.add_argument("--empty-lines", action="store_true", help="learn lines labelled '' as reading nothing")
-    fit.add_argument("--epochs", type=int, default=6)
+    fit.add_argument("--epochs", type=int, default=10)
     fit.add_argument("--out", type=Path, required=True, help="checkpoint of the best epoch")
     fit.add_argument("--threads", type=int, default=2)
-    fit.add_argument("--width", type=int, default=48, help="the net's first-layer channels (48: the shipped net; "
+    fit.add_argument("--width", type=int, default=24, help="the net's first-layer channels (24: the shipped net since session 16; 48 before; "
                      "the cost per line grows as its square; an --init checkpoint keeps its own)")
     compare = sub.add_parser("compare", help="PP-OCR's recogniser and the net on a synthetic set's true number quads")
     compare.add_argument("--data", type=Path, required=True, help="a gauged synth images folder (labels.jsonl)")
