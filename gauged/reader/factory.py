@@ -28,8 +28,8 @@ def ocr_model_path(name: str, models_dir: Path | None = None) -> Path:
     """The OCR's own model file (the number net, the int8 text detector): ``models_dir/name`` when a
     candidate folder holds one, else the shipped file, so a folder with a candidate crop model alone
     is read with the shipped OCR."""
-    if models_dir is not None and (Path(models_dir) / name).is_file():
-        return Path(models_dir) / name
+    if models_dir is not None and (candidate := Path(models_dir) / name).is_file():
+        return candidate
     return packaged_model_path(name)
 
 

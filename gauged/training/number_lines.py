@@ -91,10 +91,13 @@ def write_lines(first_seed: int, count: int, out: Path, workers: int = 2) -> int
     return len(lines)
 
 
+SHIPPED_WIDTH = 24  # first-layer channels of the shipped net (48 until session 16); loaders read a checkpoint's own
+
+
 class NumberNet(nn.Module):
     """(N, 1, 32, 128) grey in [0, 1] -> (N, 32, len(CHARS) + 1) CTC logits (blank first)."""
 
-    def __init__(self, width: int = 24):
+    def __init__(self, width: int = SHIPPED_WIDTH):
         super().__init__()
 
         def block(cin: int, cout: int) -> nn.Sequential:
@@ -148,7 +151,7 @@ def exact_by_height(net: NumberNet, lines: np.ndarray, texts: np.ndarray, height
 
 def train_number_net(data: list[Path], val: Path, epochs: int, out: Path, batch: int = 64, lr: float = 2e-3,
                      threads: int = 2, seed: int = 0, repeats: list[int] | None = None, init: Path | None = None,
-                     empty_lines: bool = False, width: int = 24) -> dict[str, float]:
+                     empty_lines: bool = False, width: int = SHIPPED_WIDTH) -> dict[str, float]:
     """Train on the lines of every ``data`` file (file ``k`` taken ``repeats[k]`` times per epoch), keep
     the checkpoint best on ``val`` (legible share) at ``out``. ``init`` starts from a checkpoint;
     with ``empty_lines``, lines labelled "" (no number there: a tick, a ghost box) are learnt as
@@ -273,7 +276,7 @@ def main(argv: list[str] | None = None) -> int:
     fit.add_argument("--epochs", type=int, default=10)
     fit.add_argument("--out", type=Path, required=True, help="checkpoint of the best epoch")
     fit.add_argument("--threads", type=int, default=2)
-    fit.add_argument("--width", type=int, default=24, help="the net's first-layer channels (24: the shipped net since session 16; 48 before; "
+    fit.add_argument("--width", type=int, default=SHIPPED_WIDTH, help="the net's first-layer channels (default %(default)s, the shipped net's; "
                      "the cost per line grows as its square; an --init checkpoint keeps its own)")
     compare = sub.add_parser("compare", help="PP-OCR's recogniser and the net on a synthetic set's true number quads")
     compare.add_argument("--data", type=Path, required=True, help="a gauged synth images folder (labels.jsonl)")
