@@ -107,6 +107,7 @@ class CropNet(nn.Module):
         self.register_buffer("std", torch.tensor([0.502, 0.502, 0.502]).view(1, 3, 1, 1))
         self.needle_branch: NeedleBranch | None = None
         self.trunk_frozen = False
+        self.keypoint_decoder_only = False
 
     def add_needle_branch(self) -> None:
         """Give the needle its own decoder, a copy of the shared one's up4/up2/head, and freeze the
@@ -133,11 +134,25 @@ class CropNet(nn.Module):
         for parameter in self.parameters():
             parameter.requires_grad = True
 
+    def freeze_all_but_keypoint_decoder(self) -> None:
+        """Train only the shared decoder's stride-4 and stride-2 blocks and the head: where the keypoint
+        peaks are shaped. The encoder, ``up8`` and a needle branch (which decodes from ``up8``'s output)
+        stay as they are, so a branch's needle mask is unchanged; the head's needle row changes, but
+        with a branch that row is not the output."""
+        self.trunk_frozen = False
+        self.keypoint_decoder_only = True
+        for name, parameter in self.named_parameters():
+            parameter.requires_grad = name.split(".")[0] in ("up4", "up2", "head")
+
     def train(self, mode: bool = True) -> CropNet:
         super().train(mode)
         if self.trunk_frozen and mode:  # the frozen trunk keeps its statistics
             for child in (self.encoder, self.up8, self.up4, self.up2, self.head):
                 child.eval()
+        if self.keypoint_decoder_only and mode:
+            for child in (self.encoder, self.up8, self.needle_branch):
+                if child is not None:
+                    child.eval()
         return self
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:

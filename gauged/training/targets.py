@@ -8,6 +8,8 @@ Points are in input-pixel coordinates of the project's convention (pixel centres
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import math
 
 import cv2
@@ -42,14 +44,16 @@ def downsample_mask(mask: np.ndarray, stride: int) -> np.ndarray:
 
 
 def crop_targets(points: dict[str, np.ndarray | None], needle_mask: np.ndarray | None, size: int,
-                 channels: tuple[str, ...], stride: int = 2, sigma_cells: float = 1.5
-                 ) -> tuple[np.ndarray, np.ndarray]:
+                 channels: tuple[str, ...], stride: int = 2, sigma_cells: float = 1.5,
+                 sigma_by_channel: Mapping[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Targets (C, size/stride, size/stride) float32 and a per-channel validity vector (C,) float32.
 
     ``points`` maps each heatmap channel name to (N, 2) points, an empty array (labelled: none there)
     or ``None`` (not labelled: the channel is masked out of the loss). The last channel ``needle`` is
-    the needle mask; ``needle_mask`` of ``None`` means not labelled.
+    the needle mask; ``needle_mask`` of ``None`` means not labelled. Heatmap peaks have the width
+    ``sigma_cells``, or ``sigma_by_channel[name]`` for the channels it names.
     """
+    sigma_by_channel = sigma_by_channel or {}
     out_shape = (size // stride, size // stride)
     target = np.zeros((len(channels), *out_shape), np.float32)
     valid = np.zeros(len(channels), np.float32)
@@ -62,7 +66,8 @@ def crop_targets(points: dict[str, np.ndarray | None], needle_mask: np.ndarray |
         pts = points.get(name)
         if pts is None:
             continue
-        target[index] = gaussian_heatmap(np.asarray(pts, float).reshape(-1, 2), out_shape, stride, sigma_cells)
+        target[index] = gaussian_heatmap(np.asarray(pts, float).reshape(-1, 2), out_shape, stride,
+                                         sigma_by_channel.get(name, sigma_cells))
         valid[index] = 1.0
     return target, valid
 

@@ -35,6 +35,7 @@ from gauged.training.targets import crop_targets
 log = logging.getLogger(__name__)
 
 HEATMAPS = CROP_CHANNELS[:-1]
+NOTCH_CHANNELS = ("start", "end", "major")
 
 
 def widened_needle(sample: CropSample, pixels: int) -> CropSample:
@@ -53,8 +54,8 @@ def widened_needle(sample: CropSample, pixels: int) -> CropSample:
     return CropSample(sample.image, sample.points, cv2.dilate(sample.needle, kernel), sample.source)
 
 
-def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength: float, colour_swap: float = 0.0
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength: float, colour_swap: float = 0.0,
+              sigma_by_channel: dict[str, float] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One training example: (3, S, S) float32 input, (C, S/2, S/2) targets, (C,) validity. With
     probability ``colour_swap`` the image's colour channels are shuffled first (a black needle stays
     black, a red one may turn blue): the engine paints few needle colours, real dials more."""
@@ -69,13 +70,13 @@ def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength:
     needle = None if sample.needle is None else warp_image(sample.needle, matrix, size, nearest=True)
     points = {name: (None if sample.points.get(name) is None else warp_points(np.asarray(sample.points[name]), matrix))
               for name in HEATMAPS}
-    target, valid = crop_targets(points, needle, size, CROP_CHANNELS)
+    target, valid = crop_targets(points, needle, size, CROP_CHANNELS, sigma_by_channel=sigma_by_channel)
     x = image[:, :, ::-1].astype(np.float32).transpose(2, 0, 1) / 255.0
     return np.ascontiguousarray(x), target, valid
 
 
 def make_batches(shards, size: int, batch: int, seed: int, weights: list[float], needle_dilate_px: int = 0,
-                 colour_swap: float = 0.0):
+                 colour_swap: float = 0.0, sigma_by_channel: dict[str, float] | None = None):
     def batches(epoch: int):
         rng = np.random.default_rng(seed * 1000 + epoch)
         entries = []
@@ -84,7 +85,7 @@ def make_batches(shards, size: int, batch: int, seed: int, weights: list[float],
             entries += [(index, int(i)) for i in picks]
         order = rng.permutation(len(entries))
         for start in range(0, len(order) - batch + 1, batch):
-            xs, ts, vs = zip(*(augmented(widened_needle(shards[s].sample(i), needle_dilate_px), size, rng, 1.0, colour_swap) for s, i in (entries[k] for k in order[start:start + batch])))
+            xs, ts, vs = zip(*(augmented(widened_needle(shards[s].sample(i), needle_dilate_px), size, rng, 1.0, colour_swap, sigma_by_channel) for s, i in (entries[k] for k in order[start:start + batch])))
             x = torch.from_numpy(np.stack(xs)).contiguous(memory_format=torch.channels_last)
             yield x, torch.from_numpy(np.stack(ts)), torch.from_numpy(np.stack(vs))
     return batches
@@ -228,8 +229,17 @@ def main(argv: list[str] | None = None) -> int:
                              "(losses.upsampled_mask_loss); 1: on the coverage grid")
     parser.add_argument("--colour-swap", type=float, default=0.0, metavar="P",
                         help="shuffle each training image's colour channels with probability P (needle colours)")
+    parser.add_argument("--notch-sigma-cells", type=float, metavar="S",
+                        help="width of the start, end and major notch peaks in the targets, in output cells "
+                             "(default: 1.5, as every heatmap); narrower peaks keep neighbouring notches apart")
+    parser.add_argument("--keypoint-decoder", action="store_true",
+                        help="after --init: train only the keypoint maps' stride-4 and stride-2 decoder and head; "
+                             "the encoder, the stride-8 block and a needle branch stay exactly as they were, so "
+                             "the needle mask of a net with a branch does not change")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
+    if args.keypoint_decoder and not args.init:
+        parser.error("--keypoint-decoder fine-tunes a trained net: give that net with --init")
     if args.needle_branch and not args.init:
         parser.error("--needle-branch trains a branch off a trained net: give that net with --init")
     if args.needle_branch_up8 and not args.needle_branch:
@@ -246,7 +256,7 @@ def main(argv: list[str] | None = None) -> int:
     # Any --init sets every weight, so the ImageNet ones are not loaded first.
     model = CropNet(args.size, pretrained=not (args.scratch or args.init)).to(memory_format=torch.channels_last)
     init_has_branch = bool(args.init) and has_needle_branch(args.init)
-    if init_has_branch and not args.needle_branch:
+    if init_has_branch and not (args.needle_branch or args.keypoint_decoder):
         parser.error(f"--init {args.init} has a needle branch: continue it with --needle-branch")
     if init_has_branch:
         model.add_needle_branch()  # before loading, so the export's convolutions match the net's
@@ -263,6 +273,11 @@ def main(argv: list[str] | None = None) -> int:
         model.deepen_needle_branch()
     if args.needle_branch and args.train_all:
         model.unfreeze()
+    if args.keypoint_decoder:
+        model.freeze_all_but_keypoint_decoder()
+        model.to(memory_format=torch.channels_last)
+        log.info("keypoint decoder: %d trainable parameters, the rest frozen",
+                 sum(p.numel() for p in model.parameters() if p.requires_grad))
     if args.needle_branch:
         model.to(memory_format=torch.channels_last)
         log.info("needle branch: %d trainable parameters%s", sum(p.numel() for p in model.parameters() if p.requires_grad),
@@ -271,8 +286,9 @@ def main(argv: list[str] | None = None) -> int:
              args.init or ("scratch" if args.scratch else "ImageNet"), [len(s) for s in shards])
     steps = sum(int(round(len(s) * w)) for s, w in zip(shards, weights)) // args.batch
     started = time.monotonic()
+    sigmas = {name: args.notch_sigma_cells for name in NOTCH_CHANNELS} if args.notch_sigma_cells else None
     best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights, args.needle_dilate_px,
-                                    args.colour_swap), steps,
+                                    args.colour_swap, sigmas), steps,
                  functools.partial(_loss, needle_upsample=args.needle_loss_upsample),
                  lambda m: validate_crop(m, synth_val, real_val, args.size),
                  TrainSettings(epochs=args.epochs, lr=args.lr), args.run)
@@ -286,7 +302,9 @@ def main(argv: list[str] | None = None) -> int:
                                                     "needle_dilate_px": args.needle_dilate_px,
                                                     "needle_loss_upsample": args.needle_loss_upsample,
                                                     "colour_swap": args.colour_swap,
-                                                    "needle_branch": args.needle_branch,
+                                                    "notch_sigma_cells": args.notch_sigma_cells or 1.5,
+                                                    "keypoint_decoder": args.keypoint_decoder,
+                                                    "needle_branch": model.needle_branch is not None,
                                                     "needle_branch_up8": model.needle_branch is not None
                                                     and model.needle_branch.up8 is not None})
         log.info("exported %s", args.export)

@@ -195,3 +195,38 @@ def test_colour_swap_shuffles_the_image_channels_and_leaves_the_targets_alone():
     assert len(orders) > 1  # the channels really move
     x, _, _ = augmented(sample, SIZE, np.random.default_rng(0), 0.0, colour_swap=0.0)
     assert np.array_equal(x, x0)
+
+
+def test_the_keypoint_decoder_trains_alone_and_leaves_a_needle_branch_as_it_was():
+    torch.manual_seed(2)
+    model = CropNet(SIZE, pretrained=False, width=16).eval()
+    model.add_needle_branch()
+    x = torch.rand(2, 3, SIZE, SIZE)
+    with torch.no_grad():
+        before = model(x)
+    model.freeze_all_but_keypoint_decoder()
+    assert {name.split(".")[0] for name, p in model.named_parameters() if p.requires_grad} == {"up4", "up2", "head"}
+    model.train()
+    assert not model.encoder.training and not model.up8.training and not model.needle_branch.training
+    assert model.up4.training and model.head.training
+    optimizer = torch.optim.AdamW([p for p in model.parameters() if p.requires_grad], lr=1e-2)
+    for _ in range(3):
+        optimizer.zero_grad()
+        model(x)[:, :-1].sigmoid().mean().backward()
+        optimizer.step()
+    model.eval()
+    with torch.no_grad():
+        after = model(x)
+    assert torch.equal(after[:, -1], before[:, -1])  # the needle mask, from its own branch, is untouched
+    assert (after[:, :-1] - before[:, :-1]).abs().mean() > 1e-3  # the keypoint maps learnt
+
+
+def test_notch_peaks_can_be_drawn_narrower_than_the_other_heatmaps():
+    sample = tiny_sample(np.random.default_rng(4))
+    _, wide, _ = augmented(sample, SIZE, None, 0.0)
+    _, narrow, _ = augmented(sample, SIZE, None, 0.0, sigma_by_channel={"major": 0.75})
+    major, pivot = CROP_CHANNELS.index("major"), CROP_CHANNELS.index("pivot")
+    assert np.array_equal(narrow[pivot], wide[pivot])  # other channels keep the default width
+    assert narrow[major].sum() < 0.5 * wide[major].sum()  # three peaks, each (0.75 / 1.5)^2 the mass
+    # the peaks stay where they were: the narrow map's maxima are the wide map's
+    assert np.array_equal(np.argwhere(narrow[major] == narrow[major].max()), np.argwhere(wide[major] == wide[major].max()))
