@@ -106,16 +106,13 @@ class CropNet(nn.Module):
         self.register_buffer("mean", torch.tensor([0.498, 0.498, 0.498]).view(1, 3, 1, 1))
         self.register_buffer("std", torch.tensor([0.502, 0.502, 0.502]).view(1, 3, 1, 1))
         self.needle_branch: NeedleBranch | None = None
-        self.trunk_frozen = False
-        self.keypoint_decoder_only = False
+        self.frozen: tuple[str, ...] = ()  # children whose weights and BatchNorm statistics stay fixed
 
     def add_needle_branch(self) -> None:
         """Give the needle its own decoder, a copy of the shared one's up4/up2/head, and freeze the
         rest of the net (its BatchNorms stay in eval mode when training)."""
         self.needle_branch = NeedleBranch(self.up4, self.up2, self.head)
-        self.trunk_frozen = True
-        for name, parameter in self.named_parameters():
-            parameter.requires_grad = name.startswith("needle_branch.")
+        self._freeze("encoder", "up8", "up4", "up2", "head")
 
     def deepen_needle_branch(self) -> None:
         """Give the needle branch its own stride-16 -> 8 block too (a copy of the shared ``up8``), so it
@@ -124,33 +121,31 @@ class CropNet(nn.Module):
         if self.needle_branch is None:
             raise ValueError("deepen_needle_branch needs a needle branch: call add_needle_branch first")
         self.needle_branch.up8 = copy.deepcopy(self.up8)
-        for name, parameter in self.named_parameters():
-            parameter.requires_grad = name.startswith("needle_branch.") or not self.trunk_frozen
+        self._freeze(*self.frozen)  # the new block trains unless the branch is frozen
 
     def unfreeze(self) -> None:
         """Train every weight again (the trunk too): a net fine-tuned so is a needle model of its own,
         since its keypoint maps drift from the file it started from."""
-        self.trunk_frozen = False
-        for parameter in self.parameters():
-            parameter.requires_grad = True
+        self._freeze()
 
     def freeze_all_but_keypoint_decoder(self) -> None:
         """Train only the shared decoder's stride-4 and stride-2 blocks and the head: where the keypoint
         peaks are shaped. The encoder, ``up8`` and a needle branch (which decodes from ``up8``'s output)
         stay as they are, so a branch's needle mask is unchanged; the head's needle row changes, but
         with a branch that row is not the output."""
-        self.trunk_frozen = False
-        self.keypoint_decoder_only = True
+        self._freeze("encoder", "up8", "needle_branch")
+
+    def _freeze(self, *children: str) -> None:
+        """Fix the weights of the named children and train every other weight."""
+        self.frozen = children
         for name, parameter in self.named_parameters():
-            parameter.requires_grad = name.split(".")[0] in ("up4", "up2", "head")
+            parameter.requires_grad = name.split(".")[0] not in children
 
     def train(self, mode: bool = True) -> CropNet:
         super().train(mode)
-        if self.trunk_frozen and mode:  # the frozen trunk keeps its statistics
-            for child in (self.encoder, self.up8, self.up4, self.up2, self.head):
-                child.eval()
-        if self.keypoint_decoder_only and mode:
-            for child in (self.encoder, self.up8, self.needle_branch):
+        if mode:  # frozen children keep their BatchNorm statistics
+            for name in self.frozen:
+                child = getattr(self, name)
                 if child is not None:
                     child.eval()
         return self
