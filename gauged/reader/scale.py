@@ -13,6 +13,7 @@ notch to ``max`` at the end notch, no OCR needed.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import replace
@@ -24,13 +25,13 @@ from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.scale_fit import RING_GAP, fit_angle_value, fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.full_circle import fit_full_circle
-from gauged.reader.numbers import nice_step, read_as_digits
+from gauged.reader.numbers import NICE_MANTISSAS, nice_step, read_as_digits
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
 REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered",
            "dropped_decimal_point", "irregular_numbers", "numbers_off_grid",
-           "secondary_scale_only", "ambiguous_numbers", "numbers_past_ends")
+           "secondary_scale_only", "ambiguous_numbers", "numbers_past_ends", "numbers_not_round")
 INNER_RING = 0.8  # ring radii: read numbers inside this may be an inner scale if printed numbers lie further out
 SECONDARY_RADIUS = 0.62  # ring radii; main-scale numbers on 300 synthetic renders sit at >= 0.69 (1st pct)
 GRID_MIN_HINTS = 5  # confident number centres needed for the grid check
@@ -42,6 +43,7 @@ COVER_STEPS = 2.5  # the read numbers must reach within this many number steps o
 # refused 26 of 300 synthetic renders, 14 of which 2.5 reads within 2.1%; the bunched-numbers case stays refused)
 COVER_STEPS_SURE = 3.5  # ... or this many when SURE_NUMBERS distinct numbers read as digits agree (dev sets: 300
 SURE_NUMBERS = 4  # synthetic + 21 real, 5 more reads all within 1.2%; every wild read had 3 numbers or a 4.8-step gap)
+GRID_MAX_STEPS = 50  # round steps between a scale's lowest and highest agreeing number (a dial prints ~5-20)
 PAST_END = 0.5  # of the fitted range: an agreeing number this far past a scale end refutes the fit (1,308 reads
 # of dev300, fresh300, held-out and the 21 real photos: right ones <= 0.35, the wild 000516 1.58)
 
@@ -194,7 +196,7 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
     distinct = len(set(values))
     if distinct < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers but {distinct} distinct values, need {min_inliers}")
-    for check in (_irregular, _past_ends, _uncovered, _dropped_decimal_point, _rival):
+    for check in (_irregular, _off_printed_grid, _past_ends, _uncovered, _dropped_decimal_point, _rival):
         failure = check(model)
         if failure is not None:
             return failure
@@ -256,6 +258,47 @@ def _regular(values: np.ndarray) -> bool:
     diffs = np.diff(values)
     multiples = diffs / diffs.min()
     return bool(np.abs(multiples - np.round(multiples)).max() <= STEP_TOLERANCE)
+
+
+def _off_printed_grid(model: ScaleModel) -> StageFailure | None:
+    """A failure when the agreeing numbers are no scale's printed numbers: no round step (1, 2, 2.5 or
+    5 x 10^k) puts them, all but one, within :data:`GRID_MAX_STEPS` steps of each other.
+
+    A dial prints its numbers at multiples of a round step, a few steps apart. Two neighbouring numbers
+    read as one ("20" and "40" as "2040", "60" and "80" as "6080", "80" and "100" as "8010") keep
+    nearly the proportions of the numbers they join, so three of them can agree on a line and pass
+    :func:`_irregular` (4040 is 2.09 times 1930); but no round step divides 4040, 1930 and 5970 short
+    of 10, hundreds of steps apart. One number may be off the grid: a "0" misread "0.70" beside 20, 40,
+    60, 100 still leaves a right scale.
+    """
+    values = np.unique(agreeing_digit_values(model))
+    if len(values) < 3:
+        return None
+    for left_out in range(-1, len(values)):
+        kept = values if left_out < 0 else np.delete(values, left_out)
+        step = round_step(kept)
+        if step > 0 and (kept[-1] - kept[0]) / step <= GRID_MAX_STEPS:
+            return None
+    return StageFailure(STAGE, "numbers_not_round",
+                        "agreeing numbers " + ", ".join(f"{v:g}" for v in values)
+                        + f" are not multiples of one round step within {GRID_MAX_STEPS} steps of each other")
+
+
+def round_step(values: np.ndarray) -> float:
+    """The largest round step (1, 2, 2.5 or 5 x 10^k) of which every difference of the sorted ``values``
+    is a whole multiple, down to a millionth of their span; 0.0 when there is none or one value."""
+    span = float(values[-1] - values[0])
+    if span <= 0:
+        return 0.0
+    diffs = np.diff(values)
+    top = math.floor(math.log10(span))
+    for exponent in range(top, top - 7, -1):
+        for mantissa in sorted(NICE_MANTISSAS, reverse=True):
+            step = mantissa * 10.0**exponent
+            q = diffs / step
+            if np.all(np.abs(q - np.round(q)) < 1e-6 * np.maximum(1.0, q)):
+                return step
+    return 0.0
 
 
 def _past_ends(model: ScaleModel) -> StageFailure | None:

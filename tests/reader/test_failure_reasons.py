@@ -271,6 +271,24 @@ def test_numbers_past_ends_when_the_line_puts_its_own_numbers_beyond_the_scale()
     assert scales[0].min_value == pytest.approx(0, abs=0.05) and scales[0].max_value == pytest.approx(4, abs=0.05)
 
 
+def test_numbers_not_round_when_neighbouring_numbers_were_read_as_one():
+    """"20"+"40", "60"+"80" and "80"+"100" read as 2040, 6080 and 8010 at the places of 20, 60 and 80
+    on a 0..120 dial (fresh300 000109 with a retrained crop model, 8,234% off) agree on a line, and
+    their differences 4040 and 1930 pass the irregularity check (2.09 steps); but no round step puts
+    them within 50 steps of each other: refused. A "0" misread "0.7" beside 20, 40, 60 and 100 is
+    the one number the check lets off the grid: that dial still reads 0..120."""
+    dial = Dial(majors=7)
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    merged = [_marker(dial, dial.start_deg + k * step, v) for k, v in ((1, 2040), (3, 6080), (4, 8010))]
+    failure = assert_failure(fit_scales(arc, merged), "scale", "numbers_not_round")
+    assert "2040, 6080, 8010" in failure.detail
+    one_off = [_marker(dial, dial.start_deg + k * step, v) for k, v in ((0, 0.7), (1, 20), (2, 40), (3, 60), (5, 100))]
+    scales = fit_scales(arc, one_off)
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].min_value == pytest.approx(0, abs=1.0) and scales[0].max_value == pytest.approx(120, abs=1.0)
+
+
 def test_four_or_more_agreeing_numbers_may_leave_an_end_three_steps_away_not_four():
     """3..7 of a 0..10 dial (the numbers near both ends unread) leave each end three steps off: five
     numbers at one step carry the line that far. 3..6 leave the top end four steps off: refused."""

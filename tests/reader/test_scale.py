@@ -36,7 +36,7 @@ def _ring(dial: Dial, values: list[float], radius: float, steps: list[int] | Non
 
 DIAL = Dial()
 BAR = [float(v) for v in range(11)]  # 0..10 bar, outer
-PSI = [14.5 * v for v in range(11)]  # 0..145 psi, inner
+PSI = [15.0 * v for v in range(11)]  # 0..150 psi, inner: a second scale prints round numbers of its own unit
 
 
 @pytest.mark.parametrize("outer_radius,inner_radius", [(1.15, 0.75), (0.9, 0.6)])
@@ -45,7 +45,7 @@ def test_the_outer_ring_is_the_primary_scale(outer_radius, inner_radius):
     markers = _ring(DIAL, PSI, inner_radius, [0, 2, 4, 6, 8, 10]) + _ring(DIAL, BAR, outer_radius, [0, 2, 4, 6, 8, 10])
     scales = fit_scales(arc, markers)
     assert not isinstance(scales, StageFailure), scales
-    assert [round(s.max_value, 3) for s in scales] == [10.0, 145.0]
+    assert [round(s.max_value, 3) for s in scales] == [10.0, 150.0]
 
 
 def test_an_unreadable_outer_ring_is_refused_not_answered_with_the_inner_scale():
@@ -211,3 +211,18 @@ def test_unread_printed_numbers_further_out_make_the_read_ring_a_secondary_scale
     assert "further out" in failure.detail
     # hints on the read ring itself are no such evidence
     assert not isinstance(fit_scales(arc, inner, hints=_centres(DIAL, [1, 5, 9], radius=0.66)), StageFailure)
+
+
+@pytest.mark.parametrize("values,step", [
+    ([2040.0, 6080.0, 8010.0], 10.0),  # two numbers read as one: only 10 divides their differences
+    ([20.0, 40.0, 60.0, 100.0], 20.0),
+    ([0.0, 0.2, 0.6], 0.2),
+    ([-30.0, -20.0, 0.0], 10.0),
+    ([0.0, 250.0, 1000.0], 250.0),
+    ([0.0, 15.0, 45.0], 5.0),  # a step of 15 is printed as multiples of the round 5
+    ([7.0], 0.0),
+])
+def test_round_step_is_the_largest_round_step_dividing_every_difference(values, step):
+    from gauged.reader.scale import round_step
+
+    assert round_step(np.array(values)) == pytest.approx(step)
