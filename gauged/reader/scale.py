@@ -44,6 +44,8 @@ COVER_STEPS = 2.5  # the read numbers must reach within this many number steps o
 COVER_STEPS_SURE = 3.5  # ... or this many when SURE_NUMBERS distinct numbers read as digits agree (dev sets: 300
 SURE_NUMBERS = 4  # synthetic + 21 real, 5 more reads all within 1.2%; every wild read had 3 numbers or a 4.8-step gap)
 GRID_MAX_STEPS = 50  # round steps between a scale's lowest and highest agreeing number (a dial prints ~5-20)
+TURN_TOLERANCE = math.radians(6.0)  # dial angle: how near a number a turn on must lie to where the line puts it
+TURN_STEPS = 2.5  # ... and how many of the agreeing numbers' steps past the fitted ends its value may be
 PAST_END = 0.5  # of the fitted range: an agreeing number this far past a scale end refutes the fit (1,308 reads
 # of dev300, fresh300, held-out and the 21 real photos: right ones <= 0.35, the wild 000516 1.58)
 
@@ -196,7 +198,7 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
     distinct = len(set(values))
     if distinct < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers but {distinct} distinct values, need {min_inliers}")
-    for check in (_irregular, _off_printed_grid, _past_ends, _uncovered, _dropped_decimal_point, _rival):
+    for check in (_irregular, _off_printed_grid, _past_ends, _a_turn_on, _uncovered, _dropped_decimal_point, _rival):
         failure = check(model)
         if failure is not None:
             return failure
@@ -318,6 +320,37 @@ def _past_ends(model: ScaleModel) -> StageFailure | None:
         return StageFailure(STAGE, "numbers_past_ends",
                             f"agreeing numbers {min(values):g}..{max(values):g} reach {past:.3g} past the scale's "
                             f"fitted ends {model.min_value:.4g}..{model.max_value:.4g}")
+    return None
+
+
+def _a_turn_on(model: ScaleModel) -> StageFailure | None:
+    """A failure when a number the line left out sits where the line, continued a turn further, puts it.
+
+    The fitted ends bound the scale: the line maps the dial angles between them, and a number elsewhere
+    on the dial is a distractor. But when the next number or two of the agreeing ones' progression past
+    an end is read just where the scale, running on through that end, would print it, the scale does
+    not end there: the ends are wrong, and a needle beyond the false end is read on the wrong side of
+    the dial. A 0..0.25 bar scale sweeping 335
+    degrees got its start at "0.15" and its end at "0.10"; "0.20" then lay a turn on from where the
+    line put it, and the needle at 0.145 was read as -0.12 (fresh set 000164).
+    """
+    values = np.unique(agreeing_digit_values(model))
+    if model.slope == 0 or len(values) < 2:
+        return None
+    step = float(np.diff(values).min())
+    low, high = sorted((model.min_value, model.max_value))
+    for marker in model.markers:
+        if marker.inlier or marker.angle is None or not read_as_digits(marker.text) or low <= marker.value <= high:
+            continue
+        steps = (marker.value - values[0]) / step
+        if abs(steps - round(steps)) > STEP_TOLERANCE or max(low - marker.value, marker.value - high) > TURN_STEPS * step:
+            continue  # not the scale's next number or two: a misread or a distractor
+        wanted = (marker.value - model.intercept) / model.slope  # the unwrapped angle the line prints it at
+        seen = model.unwrap(marker.angle)
+        if min(abs(seen + turn - wanted) for turn in (-2 * math.pi, 2 * math.pi)) <= TURN_TOLERANCE:
+            return StageFailure(STAGE, "numbers_past_ends",
+                                f"{marker.text!r} lies where the line puts {marker.value:g} a turn on, past the "
+                                f"scale's fitted ends {model.min_value:.4g}..{model.max_value:.4g}: the ends are wrong")
     return None
 
 

@@ -289,6 +289,23 @@ def test_numbers_not_round_when_neighbouring_numbers_were_read_as_one():
     assert scales[0].min_value == pytest.approx(0, abs=1.0) and scales[0].max_value == pytest.approx(120, abs=1.0)
 
 
+def test_numbers_past_ends_when_a_number_lies_a_turn_on_along_the_line():
+    """0..10 read on a 0..10 dial at 27 degrees a step, and "12" where the line, continued through the
+    end and across the gap, prints 12: the scale runs on past its fitted end, so the ends are wrong
+    (a 335-degree scale whose arc ended at "0.10", fresh set 000164, read -0.12 for 0.145). The same
+    "12" anywhere else in the gap is a distractor, and the dial reads as before."""
+    dial = Dial()
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    printed = [_marker(dial, dial.start_deg + k * step, k) for k in range(0, 11, 2)]
+    failure = assert_failure(fit_scales(arc, printed + [_marker(dial, dial.start_deg + 12 * step, 12)]),
+                             "scale", "numbers_past_ends")
+    assert "a turn on" in failure.detail
+    scales = fit_scales(arc, printed + [_marker(dial, dial.start_deg + 12 * step - 20.0, 12)])
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].max_value == pytest.approx(10, abs=0.05)
+
+
 def test_four_or_more_agreeing_numbers_may_leave_an_end_three_steps_away_not_four():
     """3..7 of a 0..10 dial (the numbers near both ends unread) leave each end three steps off: five
     numbers at one step carry the line that far. 3..6 leave the top end four steps off: refused."""
