@@ -8,6 +8,7 @@ component nearest the pivot is used, so a red zone or a second hand elsewhere do
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -19,7 +20,7 @@ from gauged.types import NeedleLine, StageFailure
 
 STAGE = "needle"
 REASONS = ("no_needle", "too_few_pixels", "degenerate_line", "needle_off_centre", "no_intersection",
-           "intersection_behind")
+           "intersection_behind", "two_needles")
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,8 @@ class NeedleReading:
 
 
 MIN_PIXELS = 6  # mask cells a needle line needs; a smaller component is a speck, not the needle
+RIVAL_SHARE = 0.5  # of the needle's cells: a second component this large may be a needle of its own
+RIVAL_DEG = 20.0  # degrees between the two strokes' scale angles that make them two needles
 
 
 def needle_pixels(needle_prob: np.ndarray, stride: int, centre: tuple[float, float], threshold: float = 0.5
@@ -40,19 +43,30 @@ def needle_pixels(needle_prob: np.ndarray, stride: int, centre: tuple[float, flo
     """Cell centres (N, 2) in crop pixels and probabilities (N,) of the mask component nearest ``centre``
     among those of at least :data:`MIN_PIXELS` cells (any, when none is that large): a one-cell speck
     of the counterweight beside the hub of a real oil gauge was taken for its needle."""
+    components = mask_components(needle_prob, stride, centre, threshold)
+    return components[0] if components else (np.zeros((0, 2)), np.zeros(0))
+
+
+def mask_components(needle_prob: np.ndarray, stride: int, centre: tuple[float, float], threshold: float = 0.5
+                    ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The mask's connected components of at least :data:`MIN_PIXELS` cells (all of them, when none is
+    that large) as (cell centres (N, 2) in crop pixels, probabilities (N,)), nearest ``centre`` first."""
     mask = (needle_prob >= threshold).astype(np.uint8)
     count, labels = cv2.connectedComponents(mask, connectivity=8)
     if count <= 1:
-        return np.zeros((0, 2)), np.zeros(0)
+        return []
     sizes = np.bincount(labels.ravel(), minlength=count)
     large = sizes >= MIN_PIXELS
     large[0] = False  # the background
-    ys, xs = np.nonzero(np.isin(labels, np.flatnonzero(large)) if large.any() else labels)
-    points = np.stack([stride * (xs + 0.5), stride * (ys + 0.5)], axis=1)
-    distances = np.hypot(points[:, 0] - centre[0], points[:, 1] - centre[1])
-    label = labels[ys[np.argmin(distances)], xs[np.argmin(distances)]]
-    chosen = labels[ys, xs] == label
-    return points[chosen], needle_prob[ys[chosen], xs[chosen]].astype(np.float64)
+    kept = np.flatnonzero(large) if large.any() else np.arange(1, count)
+    out = []
+    for label in kept:
+        ys, xs = np.nonzero(labels == label)
+        points = np.stack([stride * (xs + 0.5), stride * (ys + 0.5)], axis=1)
+        out.append((float(np.hypot(points[:, 0] - centre[0], points[:, 1] - centre[1]).min()), points,
+                    needle_prob[ys, xs].astype(np.float64)))
+    out.sort(key=lambda item: item[0])
+    return [(points, probs) for _, points, probs in out]
 
 
 def fit_needle(needle_prob: np.ndarray, stride: int, arc: ScaleArc, threshold: float = 0.5,
@@ -78,4 +92,35 @@ def fit_needle(needle_prob: np.ndarray, stride: int, arc: ScaleArc, threshold: f
     angle = needle_dial_angle(arc.ellipse, line, arc.centre)
     if isinstance(angle, StageFailure):
         return angle
+    rival = _rival_needle(needle_prob, stride, arc, threshold, max_offset, len(points), angle)
+    if rival is not None:
+        return rival
     return NeedleReading(line, angle, float(probs.mean()), float(offset))
+
+
+def _rival_needle(needle_prob: np.ndarray, stride: int, arc: ScaleArc, threshold: float, max_offset: float,
+                  size: int, angle: float) -> StageFailure | None:
+    """A failure when another mask component, at least :data:`RIVAL_SHARE` of the chosen one's size, is a
+    needle of its own: its line passes within ``max_offset`` radii of the centre too and points at a
+    place of the scale more than :data:`RIVAL_DEG` away (and not the opposite way, where a counterweight
+    lies). A cable across the face of a -30..50 degC dial made a component as large as the needle's,
+    nearer the hub, and was read 10.1 for -31.3 (fresh set seed 15,000,000, 000190); a dial with two
+    hands has two needles as well. Which one is the needle the mask cannot tell, so the reader refuses."""
+    for points, probs in mask_components(needle_prob, stride, arc.centre, threshold)[1:]:
+        if len(points) < max(MIN_PIXELS, RIVAL_SHARE * size):
+            continue
+        line = fit_needle_line(points, arc.centre, weights=probs, min_pixels=MIN_PIXELS)
+        if isinstance(line, StageFailure):
+            continue
+        direction = np.asarray(line.direction)
+        rel = np.asarray(arc.centre) - np.asarray(line.point)
+        if abs(rel[0] * direction[1] - rel[1] * direction[0]) / arc.ellipse.b > max_offset:
+            continue
+        other = needle_dial_angle(arc.ellipse, line, arc.centre)
+        if isinstance(other, StageFailure):
+            continue
+        apart = abs(math.degrees(math.remainder(other - angle, 2 * math.pi)))
+        if RIVAL_DEG < apart < 180.0 - RIVAL_DEG:
+            return StageFailure(STAGE, "two_needles", f"a second needle-like stroke ({len(points)} cells against "
+                                f"{size}) points {apart:.0f} degrees away from the first")
+    return None

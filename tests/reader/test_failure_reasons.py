@@ -167,6 +167,33 @@ def test_needle_off_centre_when_the_line_misses_the_pivot():
     assert 0.38 <= offset <= 0.43  # 40 px on a radius of 100 px, give or take the stride-2 cells
 
 
+def _stroke_off_the_hub(dial: Dial, deg: float) -> np.ndarray:
+    """A needle-like stroke towards ``deg`` that starts a quarter radius out, so it is a component of its own."""
+    stroke = needle_prob(Dial(needle_deg=deg), tail=0.01)
+    rows, cols = np.indices(stroke.shape)
+    cx, cy = dial.ellipse.center
+    stroke[np.hypot(STRIDE * (cols + 0.5) - cx, STRIDE * (rows + 0.5) - cy) < 0.25 * dial.ellipse.a] = 0.0
+    return stroke
+
+
+def test_two_needles_when_a_second_stroke_as_large_points_elsewhere():
+    """A cable across the face made a mask component as large as the needle's, pointing 143 degrees
+    away (fresh set seed 15,000,000, 000190, read 10.1 for -31.3): which is the needle the mask cannot
+    tell, so the reader refuses. A stroke the opposite way (a counterweight) or a small one is no rival."""
+    dial = Dial(needle_deg=0.0)
+    arc = arc_of(dial)
+    needle = needle_prob(dial)
+    failure = assert_failure(fit_needle(np.maximum(needle, _stroke_off_the_hub(dial, 120.0)), STRIDE, arc),
+                             "needle", "two_needles")
+    assert "120 degrees" in failure.detail
+    assert isinstance(fit_needle(np.maximum(needle, _stroke_off_the_hub(dial, 180.0)), STRIDE, arc), NeedleReading)
+    short = _stroke_off_the_hub(dial, 120.0)
+    rows, cols = np.indices(short.shape)
+    cx, cy = dial.ellipse.center
+    short[np.hypot(STRIDE * (cols + 0.5) - cx, STRIDE * (rows + 0.5) - cy) > 0.45 * dial.ellipse.a] = 0.0
+    assert isinstance(fit_needle(np.maximum(needle, short), STRIDE, arc), NeedleReading)
+
+
 # ocr ---------------------------------------------------------------------------------------------
 
 def test_ocr_unavailable_without_engine_and_without_known_scale():
