@@ -38,19 +38,12 @@ RIVAL_SHARE = 0.5  # of the needle's cells: a second component this large may be
 RIVAL_DEG = 20.0  # degrees between the two strokes' scale angles that make them two needles
 
 
-def needle_pixels(needle_prob: np.ndarray, stride: int, centre: tuple[float, float], threshold: float = 0.5
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """Cell centres (N, 2) in crop pixels and probabilities (N,) of the mask component nearest ``centre``
-    among those of at least :data:`MIN_PIXELS` cells (any, when none is that large): a one-cell speck
-    of the counterweight beside the hub of a real oil gauge was taken for its needle."""
-    components = mask_components(needle_prob, stride, centre, threshold)
-    return components[0] if components else (np.zeros((0, 2)), np.zeros(0))
-
-
 def mask_components(needle_prob: np.ndarray, stride: int, centre: tuple[float, float], threshold: float = 0.5
                     ) -> list[tuple[np.ndarray, np.ndarray]]:
     """The mask's connected components of at least :data:`MIN_PIXELS` cells (all of them, when none is
-    that large) as (cell centres (N, 2) in crop pixels, probabilities (N,)), nearest ``centre`` first."""
+    that large) as (cell centres (N, 2) in crop pixels, probabilities (N,)), nearest ``centre`` first:
+    the first is the needle. The size floor keeps a speck from being taken for it (a one-cell speck of
+    the counterweight beside the hub of a real oil gauge was)."""
     mask = (needle_prob >= threshold).astype(np.uint8)
     count, labels = cv2.connectedComponents(mask, connectivity=8)
     if count <= 1:
@@ -78,43 +71,46 @@ def fit_needle(needle_prob: np.ndarray, stride: int, arc: ScaleArc, threshold: f
     ``max_offset`` radii from the dial centre: not a needle turning about the pivot),
     ``no_intersection``/``intersection_behind`` (from the ellipse intersection).
     """
-    points, probs = needle_pixels(needle_prob, stride, arc.centre, threshold)
-    if len(points) == 0:
+    components = mask_components(needle_prob, stride, arc.centre, threshold)
+    if not components:
         return StageFailure(STAGE, "no_needle", f"no needle pixel above {threshold:g}")
+    points, probs = components[0]
     line = fit_needle_line(points, arc.centre, weights=probs, min_pixels=MIN_PIXELS)
     if isinstance(line, StageFailure):
         return line
-    direction = np.asarray(line.direction)
-    rel = np.asarray(arc.centre) - np.asarray(line.point)
-    offset = abs(rel[0] * direction[1] - rel[1] * direction[0]) / arc.ellipse.b
+    offset = _offset(line, arc)
     if offset > max_offset:
         return StageFailure(STAGE, "needle_off_centre", f"needle line passes {offset:.2f} radii from the centre")
     angle = needle_dial_angle(arc.ellipse, line, arc.centre)
     if isinstance(angle, StageFailure):
         return angle
-    rival = _rival_needle(needle_prob, stride, arc, threshold, max_offset, len(points), angle)
+    rival = _rival_needle(components[1:], arc, max_offset, len(points), angle)
     if rival is not None:
         return rival
     return NeedleReading(line, angle, float(probs.mean()), float(offset))
 
 
-def _rival_needle(needle_prob: np.ndarray, stride: int, arc: ScaleArc, threshold: float, max_offset: float,
+def _offset(line: NeedleLine, arc: ScaleArc) -> float:
+    """Distance of ``line`` from the dial centre, in radii (the ellipse's minor semi-axis)."""
+    direction = np.asarray(line.direction)
+    rel = np.asarray(arc.centre) - np.asarray(line.point)
+    return float(abs(rel[0] * direction[1] - rel[1] * direction[0]) / arc.ellipse.b)
+
+
+def _rival_needle(others: list[tuple[np.ndarray, np.ndarray]], arc: ScaleArc, max_offset: float,
                   size: int, angle: float) -> StageFailure | None:
-    """A failure when another mask component, at least :data:`RIVAL_SHARE` of the chosen one's size, is a
+    """A failure when one of the ``others`` mask components (beside the chosen one, of ``size`` cells),
+    at least :data:`RIVAL_SHARE` of that size, is a
     needle of its own: its line passes within ``max_offset`` radii of the centre too and points at a
     place of the scale more than :data:`RIVAL_DEG` away (and not the opposite way, where a counterweight
     lies). A cable across the face of a -30..50 degC dial made a component as large as the needle's,
     nearer the hub, and was read 10.1 for -31.3 (fresh set seed 15,000,000, 000190); a dial with two
     hands has two needles as well. Which one is the needle the mask cannot tell, so the reader refuses."""
-    for points, probs in mask_components(needle_prob, stride, arc.centre, threshold)[1:]:
+    for points, probs in others:
         if len(points) < max(MIN_PIXELS, RIVAL_SHARE * size):
             continue
         line = fit_needle_line(points, arc.centre, weights=probs, min_pixels=MIN_PIXELS)
-        if isinstance(line, StageFailure):
-            continue
-        direction = np.asarray(line.direction)
-        rel = np.asarray(arc.centre) - np.asarray(line.point)
-        if abs(rel[0] * direction[1] - rel[1] * direction[0]) / arc.ellipse.b > max_offset:
+        if isinstance(line, StageFailure) or _offset(line, arc) > max_offset:
             continue
         other = needle_dial_angle(arc.ellipse, line, arc.centre)
         if isinstance(other, StageFailure):

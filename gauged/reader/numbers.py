@@ -246,16 +246,37 @@ def nice_step(step: float, rel: float = 1e-6) -> bool:
     return any(abs(m - n) <= rel * n or abs(m - 10 * n) <= rel * n for n in NICE_MANTISSAS)
 
 
+def _whole_multiples(diffs: np.ndarray, step: float) -> bool:
+    """Is every one of ``diffs`` a whole multiple of ``step`` (to a millionth)?"""
+    q = diffs / step
+    return bool(np.all(np.abs(q - np.round(q)) < 1e-6 * np.maximum(1.0, q)))
+
+
 def _common_step(values: np.ndarray) -> float:
     """The largest step of which every pairwise difference of ``values`` is a whole multiple."""
     d = np.diff(np.unique(np.round(values, 9)))
     if d.size == 0:
         return 0.0
     for step in sorted({float(x) for x in d}, reverse=True):
-        q = d / step
-        if np.all(np.abs(q - np.round(q)) < 1e-6 * np.maximum(1.0, q)) and step > 0:
+        if step > 0 and _whole_multiples(d, step):
             return step
     return float(d.min())
+
+
+def round_step(values: np.ndarray) -> float:
+    """The largest round step (:func:`nice_step`: 1, 2, 2.5 or 5 x 10^k) of which every difference of the
+    sorted ``values`` is a whole multiple, down to a millionth of their span; 0.0 when there is none or
+    one value."""
+    span = float(values[-1] - values[0])
+    if span <= 0:
+        return 0.0
+    diffs = np.diff(values)
+    top = math.floor(math.log10(span))
+    for exponent in range(top, top - 7, -1):
+        for mantissa in sorted(NICE_MANTISSAS, reverse=True):
+            if _whole_multiples(diffs, mantissa * 10.0**exponent):
+                return mantissa * 10.0**exponent
+    return 0.0
 
 
 def filter_progression(

@@ -25,7 +25,7 @@ from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.scale_fit import RING_GAP, fit_angle_value, fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.full_circle import fit_full_circle
-from gauged.reader.numbers import NICE_MANTISSAS, nice_step, read_as_digits
+from gauged.reader.numbers import nice_step, read_as_digits, round_step
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
@@ -286,23 +286,6 @@ def _off_printed_grid(model: ScaleModel) -> StageFailure | None:
                         + f" are not multiples of one round step within {GRID_MAX_STEPS} steps of each other")
 
 
-def round_step(values: np.ndarray) -> float:
-    """The largest round step (1, 2, 2.5 or 5 x 10^k) of which every difference of the sorted ``values``
-    is a whole multiple, down to a millionth of their span; 0.0 when there is none or one value."""
-    span = float(values[-1] - values[0])
-    if span <= 0:
-        return 0.0
-    diffs = np.diff(values)
-    top = math.floor(math.log10(span))
-    for exponent in range(top, top - 7, -1):
-        for mantissa in sorted(NICE_MANTISSAS, reverse=True):
-            step = mantissa * 10.0**exponent
-            q = diffs / step
-            if np.all(np.abs(q - np.round(q)) < 1e-6 * np.maximum(1.0, q)):
-                return step
-    return 0.0
-
-
 def _past_ends(model: ScaleModel) -> StageFailure | None:
     """A failure when an agreeing number lies well past an end of the range the fit gives the scale.
 
@@ -330,9 +313,9 @@ def _a_turn_on(model: ScaleModel) -> StageFailure | None:
     on the dial is a distractor. But when the next number or two of the agreeing ones' progression past
     an end is read just where the scale, running on through that end, would print it, the scale does
     not end there: the ends are wrong, and a needle beyond the false end is read on the wrong side of
-    the dial. A 0..0.25 bar scale sweeping 335
-    degrees got its start at "0.15" and its end at "0.10"; "0.20" then lay a turn on from where the
-    line put it, and the needle at 0.145 was read as -0.12 (fresh set 000164).
+    the dial. A 0..0.25 bar scale sweeping 335 degrees got its start at "0.15" and its end at "0.10";
+    "0.20" then lay a turn on from where the line put it, and the needle at 0.145 was read as -0.12
+    (fresh set 000164).
     """
     values = np.unique(agreeing_digit_values(model))
     if model.slope == 0 or len(values) < 2:

@@ -8,12 +8,14 @@ Points are in input-pixel coordinates of the project's convention (pixel centres
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import math
+from collections.abc import Mapping
 
 import cv2
 import numpy as np
+
+
+SIGMA_CELLS = 1.5  # width of a keypoint peak in the crop model's targets, in output cells
 
 
 def gaussian_heatmap(points: np.ndarray, shape: tuple[int, int], stride: int, sigma_cells: float) -> np.ndarray:
@@ -44,7 +46,7 @@ def downsample_mask(mask: np.ndarray, stride: int) -> np.ndarray:
 
 
 def crop_targets(points: dict[str, np.ndarray | None], needle_mask: np.ndarray | None, size: int,
-                 channels: tuple[str, ...], stride: int = 2, sigma_cells: float = 1.5,
+                 channels: tuple[str, ...], stride: int = 2, sigma_cells: float = SIGMA_CELLS,
                  sigma_by_channel: Mapping[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Targets (C, size/stride, size/stride) float32 and a per-channel validity vector (C,) float32.
 

@@ -30,7 +30,7 @@ from gauged.training.losses import crop_loss
 from gauged.training.nets import CropNet, count_parameters
 from gauged.training.real_data import load_needle_split
 from gauged.training.shards import CropSample, open_crop_shard
-from gauged.training.targets import crop_targets
+from gauged.training.targets import SIGMA_CELLS, crop_targets
 
 log = logging.getLogger(__name__)
 
@@ -231,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="shuffle each training image's colour channels with probability P (needle colours)")
     parser.add_argument("--notch-sigma-cells", type=float, metavar="S",
                         help="width of the start, end and major notch peaks in the targets, in output cells "
-                             "(default: 1.5, as every heatmap); narrower peaks keep neighbouring notches apart")
+                             f"(default: {SIGMA_CELLS:g}, as every heatmap); narrower peaks keep neighbouring notches apart")
     parser.add_argument("--keypoint-decoder", action="store_true",
                         help="after --init: train only the keypoint maps' stride-4 and stride-2 decoder and head; "
                              "the encoder, the stride-8 block and a needle branch stay exactly as they were, so "
@@ -275,11 +275,10 @@ def main(argv: list[str] | None = None) -> int:
         model.unfreeze()
     if args.keypoint_decoder:
         model.freeze_all_but_keypoint_decoder()
-        model.to(memory_format=torch.channels_last)
         log.info("keypoint decoder: %d trainable parameters, the rest frozen",
                  sum(p.numel() for p in model.parameters() if p.requires_grad))
+    model.to(memory_format=torch.channels_last)  # blocks added since the net was built are converted too
     if args.needle_branch:
-        model.to(memory_format=torch.channels_last)
         log.info("needle branch: %d trainable parameters%s", sum(p.numel() for p in model.parameters() if p.requires_grad),
                  "" if args.train_all else ", the rest frozen")
     log.info("crop model: %d parameters, %s init; %s training samples", count_parameters(model),
@@ -302,7 +301,7 @@ def main(argv: list[str] | None = None) -> int:
                                                     "needle_dilate_px": args.needle_dilate_px,
                                                     "needle_loss_upsample": args.needle_loss_upsample,
                                                     "colour_swap": args.colour_swap,
-                                                    "notch_sigma_cells": args.notch_sigma_cells or 1.5,
+                                                    "notch_sigma_cells": args.notch_sigma_cells or SIGMA_CELLS,
                                                     "keypoint_decoder": args.keypoint_decoder,
                                                     "needle_branch": model.needle_branch is not None,
                                                     "needle_branch_up8": model.needle_branch is not None

@@ -223,6 +223,6 @@ def test_unread_printed_numbers_further_out_make_the_read_ring_a_secondary_scale
     ([7.0], 0.0),
 ])
 def test_round_step_is_the_largest_round_step_dividing_every_difference(values, step):
-    from gauged.reader.scale import round_step
+    from gauged.reader.numbers import round_step
 
     assert round_step(np.array(values)) == pytest.approx(step)
