@@ -30,6 +30,7 @@ REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no
            "numbers_outside_scale")
 
 TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
+RMS_FRACTION = 0.02  # of the ring's radius: the notch RMS a fit may have (with a floor of TOLERANCE / 2)
 PIVOT_SURE = 0.5  # pivot peak score above which the pivot is trusted to check the ring
 CIRCLE_UNLESS = 1.5  # a pivot-centred circle is kept unless its notch RMS exceeds the ellipse's this much (+0.5 px)
 SHORT_ARC = np.radians(150.0)  # notches covering less than this are fitted about a confident pivot
@@ -58,6 +59,14 @@ class ScaleArc:
     notches: np.ndarray  # (N, 2) inlier notch points
     rms_px: float
     ends_inferred: bool
+    rms_limit_px: float | None = None  # the notch RMS the fit was allowed (None: RMS_FRACTION of the radius)
+
+    @property
+    def fit_share(self) -> float:
+        """The notch RMS as a share of what the fit was allowed: 0 a perfect ring, 1 the most
+        scattered ring :func:`fit_scale_arc` accepts."""
+        limit = self.rms_limit_px if self.rms_limit_px is not None else RMS_FRACTION * self.ellipse.a
+        return self.rms_px / limit
 
     @property
     def span(self) -> float:
@@ -418,7 +427,7 @@ def _snap(angle: float, notch_angles: np.ndarray) -> float:
 
 
 def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4,
-                  max_rms_fraction: float = 0.02, min_axis_ratio: float = 0.35) -> ScaleArc | StageFailure:
+                  max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35) -> ScaleArc | StageFailure:
     """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
 
     Failures: ``too_few_notches`` (fewer than ``min_notches`` notch points), ``degenerate_conic``,
@@ -463,7 +472,8 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
         return StageFailure(STAGE, "poor_fit", f"only {explained} of {len(points)} notches lie on the scale ring(s)")
     rms = float(np.sqrt(np.mean(orthogonal_distance(ellipse, points[inliers]) ** 2)))
     # The notch peaks themselves are good to about a pixel, so a small ring gets an absolute floor.
-    if rms > max(max_rms_fraction * ellipse.a, 0.5 * TOLERANCE * crop_size):
+    rms_limit = max(max_rms_fraction * ellipse.a, 0.5 * TOLERANCE * crop_size)
+    if rms > rms_limit:
         return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
     centre = ellipse.center
     # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame
@@ -500,9 +510,10 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
             # mid-scale for an end: a real 0..160 dial's "start" at 120); the largest gap between
             # the notches holds no number at all, so it is taken as the scale's, as when no end is found.
             start, end = gap
-            return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, True)
+            return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, True,
+                            rms_limit)
         return StageFailure(STAGE, "numbers_outside_scale", f"{in_gap} scale numbers lie in the gap between the scale ends")
-    return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred)
+    return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred, rms_limit)
 
 
 def _plausible_gap(keypoints: CropKeypoints, ellipse: Ellipse, centre, start: float, end: float) -> bool:

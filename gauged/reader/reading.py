@@ -53,7 +53,7 @@ def read_value(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel, min_conf
 def _confidence(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel) -> float:
     """Product of per-part trust in [0, 1]: needle mask, needle centring, notch fit, scale fit."""
     needle_part = float(np.clip(needle.mask_score, 0, 1)) * float(np.clip(1 - needle.offset / 0.2, 0, 1)) ** 0.5
-    notch_part = float(np.clip(1 - arc.rms_px / (0.02 * arc.ellipse.a), 0, 1)) ** 0.5
+    notch_part = float(np.clip(1 - arc.fit_share, 0, 1)) ** 0.5
     if scale.markers:
         inlier_share = scale.inliers / len(scale.markers)
         span = abs(scale.max_value - scale.min_value) or 1.0
