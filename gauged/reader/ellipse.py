@@ -427,7 +427,8 @@ def _snap(angle: float, notch_angles: np.ndarray) -> float:
 
 
 def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4,
-                  max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35) -> ScaleArc | StageFailure:
+                  max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35,
+                  about_pivot: bool = False) -> ScaleArc | StageFailure:
     """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
 
     Failures: ``too_few_notches`` (fewer than ``min_notches`` notch points), ``degenerate_conic``,
@@ -438,6 +439,10 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     With a confident pivot peak, a ring whose notches cover less than :data:`SHORT_ARC` about the
     pivot, or whose centre lies more than :data:`PIVOT_OFF_CENTRE` radii from it, is fitted again
     about the pivot (:func:`_centred_fit`); ``poor_fit`` when that finds no ring either.
+
+    Angles are measured about a pivot peak inside the ring when the view is oblique
+    (:data:`OBLIQUE_AXIS_RATIO`), or always with ``about_pivot`` (the pipeline's second look at a
+    refused scale, :meth:`gauged.reader.pipeline.GaugeReader._about_pivot`).
     """
     parts = [keypoints.major.points]
     for peaks in (keypoints.start, keypoints.end):
@@ -479,7 +484,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame
     # through the pivot reads angles right; but a pixel of pivot error costs ~1 degree on a small
     # dial, so the pivot is used only when the view is oblique enough for perspective to matter.
-    if len(keypoints.pivot) and ellipse.b / ellipse.a < OBLIQUE_AXIS_RATIO:
+    if len(keypoints.pivot) and (about_pivot or ellipse.b / ellipse.a < OBLIQUE_AXIS_RATIO):
         pivot = keypoints.pivot.points[0]
         if np.hypot(pivot[0] - ellipse.cx, pivot[1] - ellipse.cy) < 0.25 * ellipse.b:
             centre = (float(pivot[0]), float(pivot[1]))
