@@ -435,7 +435,8 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
 
     Failures: ``too_few_notches`` (fewer than ``min_notches`` notch points), ``degenerate_conic``,
-    ``poor_fit`` (inlier RMS above ``max_rms_fraction`` of the radius), ``too_oblique`` (axis ratio
+    ``poor_fit`` (inlier RMS above ``max_rms_fraction`` of the radius or half :data:`TOLERANCE` of the
+    crop, whichever is larger, or too few notches on the ring, :func:`_share_needed`), ``too_oblique`` (axis ratio
     below ``min_axis_ratio``, a dial seen more than ~70 degrees off-axis), ``no_scale_ends`` (start or
     end notch missing and not inferable), ``implausible_span`` (scale span outside 60-350 degrees).
 
