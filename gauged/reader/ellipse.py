@@ -430,8 +430,7 @@ def _snap(angle: float, notch_angles: np.ndarray) -> float:
 
 
 def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4,
-                  max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35,
-                  about_pivot: bool = False) -> ScaleArc | StageFailure:
+                  max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35) -> ScaleArc | StageFailure:
     """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
 
     Failures: ``too_few_notches`` (fewer than ``min_notches`` notch points), ``degenerate_conic``,
@@ -445,8 +444,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     about the pivot (:func:`_centred_fit`); ``poor_fit`` when that finds no ring either.
 
     Angles are measured about a pivot peak inside the ring when the view is oblique
-    (:data:`OBLIQUE_AXIS_RATIO`), or always with ``about_pivot`` (the pipeline's second look at a
-    refused scale, :meth:`gauged.reader.pipeline.GaugeReader._about_pivot`).
+    (:data:`OBLIQUE_AXIS_RATIO`); :func:`arc_about_pivot` measures them so on any view.
     """
     parts = [keypoints.major.points]
     for peaks in (keypoints.start, keypoints.end):
@@ -488,20 +486,46 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame
     # through the pivot reads angles right; but a pixel of pivot error costs ~1 degree on a small
     # dial, so the pivot is used only when the view is oblique enough for perspective to matter.
-    if len(keypoints.pivot) and (about_pivot or ellipse.b / ellipse.a < OBLIQUE_AXIS_RATIO):
-        pivot = keypoints.pivot.points[0]
-        if np.hypot(pivot[0] - ellipse.cx, pivot[1] - ellipse.cy) < 0.25 * ellipse.b:
-            centre = (float(pivot[0]), float(pivot[1]))
+    if ellipse.b / ellipse.a < OBLIQUE_AXIS_RATIO:
+        centre = _pivot_inside(keypoints, ellipse) or centre
+    return _arc_about(keypoints, ellipse, points[inliers], rms, rms_limit, centre)
+
+
+def arc_about_pivot(arc: ScaleArc, keypoints: CropKeypoints) -> ScaleArc | StageFailure | None:
+    """``arc``'s ring with its angles measured about the pivot peak of ``keypoints`` (ends, gap and
+    their checks again), or None when the arc is measured about it already or there is no pivot
+    peak inside the ring. :func:`fit_scale_arc` does so only on oblique views; the pipeline's second
+    look at a refused scale (:meth:`gauged.reader.pipeline.GaugeReader._about_pivot`) on any."""
+    pivot = _pivot_inside(keypoints, arc.ellipse)
+    if pivot is None or pivot == arc.centre:
+        return None
+    return _arc_about(keypoints, arc.ellipse, arc.notches, arc.rms_px, arc.rms_limit_px, pivot)
+
+
+def _pivot_inside(keypoints: CropKeypoints, ellipse: Ellipse) -> tuple[float, float] | None:
+    """The first pivot peak when it lies within a quarter of the minor semi-axis of the ring's centre."""
+    if not len(keypoints.pivot):
+        return None
+    pivot = keypoints.pivot.points[0]
+    if np.hypot(pivot[0] - ellipse.cx, pivot[1] - ellipse.cy) >= 0.25 * ellipse.b:
+        return None
+    return (float(pivot[0]), float(pivot[1]))
+
+
+def _arc_about(keypoints: CropKeypoints, ellipse: Ellipse, notches: np.ndarray, rms: float, rms_limit: float | None,
+               centre: tuple[float, float]) -> ScaleArc | StageFailure:
+    """The scale arc of the ring ``ellipse`` through its inlier ``notches``, with dial angles measured
+    about ``centre``: the ends (found, else inferred from the notches' largest gap) and their checks."""
     inferred = not (len(keypoints.start) and len(keypoints.end))
     if inferred:
-        if inliers.sum() < GAP_MIN_NOTCHES:
+        if len(notches) < GAP_MIN_NOTCHES:
             return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and too few notches to infer them")
-        ends = _ends_from_gap(dial_angle(ellipse, points[inliers], centre))
+        ends = _ends_from_gap(dial_angle(ellipse, notches, centre))
         if ends is None:
             return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and no gap between the notches "
                                 "stands out as the scale's")
         gap_start, gap_end = ends
-    notch_angles = dial_angle(ellipse, points[inliers], centre)
+    notch_angles = dial_angle(ellipse, notches, centre)
     start = (_snap(float(dial_angle(ellipse, keypoints.start.points[:1], centre)[0]), notch_angles)
              if len(keypoints.start) else gap_start)
     end = (_snap(float(dial_angle(ellipse, keypoints.end.points[:1], centre)[0]), notch_angles)
@@ -513,16 +537,15 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # gap too): then a single number peak of any score in that gap refutes it.
     in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span, 0.0 if inferred else NUMBER_SCORE)
     if in_gap >= (1 if inferred else GAP_NUMBERS):
-        gap = None if inferred or inliers.sum() < GAP_MIN_NOTCHES else _ends_from_gap(notch_angles)
+        gap = None if inferred or len(notches) < GAP_MIN_NOTCHES else _ends_from_gap(notch_angles)
         if gap is not None and _plausible_gap(keypoints, ellipse, centre, *gap):
             # The found end notches are refuted by numbers in their gap (the model took a notch
             # mid-scale for an end: a real 0..160 dial's "start" at 120); the largest gap between
             # the notches holds no number at all, so it is taken as the scale's, as when no end is found.
             start, end = gap
-            return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, True,
-                            rms_limit)
+            return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), notches, rms, True, rms_limit)
         return StageFailure(STAGE, "numbers_outside_scale", f"{in_gap} scale numbers lie in the gap between the scale ends")
-    return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), points[inliers], rms, inferred, rms_limit)
+    return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), notches, rms, inferred, rms_limit)
 
 
 def _share_needed(keypoints: CropKeypoints, ellipse: Ellipse, inliers: np.ndarray, ends: np.ndarray) -> float:

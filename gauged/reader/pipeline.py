@@ -17,7 +17,7 @@ import numpy as np
 
 from gauged.reader.crop import Crop, crop_gauge
 from gauged.reader.detect import GaugeDetector
-from gauged.reader.ellipse import ScaleArc, fit_scale_arc
+from gauged.reader.ellipse import ScaleArc, arc_about_pivot, fit_scale_arc
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
 from gauged.reader.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
 from gauged.reader.keypoints import CropKeypoints, Peaks, decode_crop_maps
@@ -40,6 +40,17 @@ PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a 
 
 def _area(box: Box) -> float:
     return max(0.0, box[2] - box[0]) * max(0.0, box[3] - box[1])
+
+
+def _sure_numbers(numbers: Peaks) -> np.ndarray:
+    """(N, 2) crop px: the number-centre peaks confident enough to check a scale's number grid."""
+    return numbers.points[numbers.scores >= NUMBER_SURE]
+
+
+def _primary_first(scales: list[ScaleModel], primary_unit: str | None) -> None:
+    """Put the scale in ``primary_unit`` first (in place) when a dial has more than one."""
+    if primary_unit and len(scales) > 1:
+        scales.sort(key=lambda s: s.unit != primary_unit)
 
 
 def _progress(read: "GaugeRead") -> int:
@@ -239,8 +250,7 @@ class GaugeReader:
             if pivoted is not None:
                 arc, needle, scales = pivoted
                 result.arc, result.needle = arc, needle
-                if primary_unit and len(scales) > 1:
-                    scales.sort(key=lambda s: s.unit != primary_unit)
+                _primary_first(scales, primary_unit)
         if isinstance(scales, StageFailure):
             result.failure = scales
             return result
@@ -288,23 +298,23 @@ class GaugeReader:
         centre projects away from its scale ellipse's centre even when the ellipse is nearly round
         (held-out 000578: axis ratio 0.97, the pivot 0.06 radii off), and the numbers' angles about the
         wrong centre then bend by 5-10% from one number to the next, past the scale line's 3-degree
-        tolerance ("100, 200, 300" read right, two on a line). So a refused scale gets the arc fitted
-        about the pivot, the needle against it, and the scale fitted to the markers read, then to
-        markers read again on the dial rectified about the pivot. The refusal stands unless the scale
-        stage accepts them.
+        tolerance ("100, 200, 300" read right, two on a line). So a refused scale gets its ring measured
+        about the pivot (:func:`gauged.reader.ellipse.arc_about_pivot`, no new fit), the needle against
+        it, and the scale fitted to the markers read, then to markers read again on the dial rectified
+        about the pivot. The refusal stands unless the scale stage accepts them.
         """
-        if not len(keypoints.pivot) or arc.centre != arc.ellipse.center or not result.markers:
-            return None  # no pivot, already about it, or nothing read to fit again
+        if not result.markers:
+            return None  # nothing read to fit again
         with timer("ellipse"):
-            pivoted = fit_scale_arc(keypoints, self.crop_size, about_pivot=True)
-        if isinstance(pivoted, StageFailure) or pivoted.centre == arc.centre:
-            return None
+            pivoted = arc_about_pivot(arc, keypoints)
+        if pivoted is None or isinstance(pivoted, StageFailure):
+            return None  # measured about the pivot already, no pivot inside the ring, or no arc about it
         with timer("needle"):
             needle = fit_needle(keypoints.needle_prob, keypoints.stride, pivoted)
         if isinstance(needle, StageFailure):
             return None
         numbers = keypoints.numbers
-        hints = numbers.points[numbers.scores >= NUMBER_SURE]
+        hints = _sure_numbers(numbers)
         with timer("scale"):
             scales = fit_scales(pivoted, result.markers, result.unit, hints=hints)
         if isinstance(scales, StageFailure):
@@ -393,7 +403,7 @@ class GaugeReader:
             return StageFailure("ocr", OCR_UNAVAILABLE, "no OCR engine and no configured scale")
         detail = self._detail(image, crop)
         numbers = keypoints.numbers
-        hints = numbers.points[numbers.scores >= NUMBER_SURE]
+        hints = _sure_numbers(numbers)
         with timer("ocr"):
             read = self.ocr.read_markers(crop.image, arc, numbers.points, detail)
         if isinstance(read, StageFailure):
@@ -422,6 +432,5 @@ class GaugeReader:
                     result.markers, scales = again, retry
         if isinstance(scales, StageFailure):
             return self._hint_look(image, crop, keypoints, arc, unit, hints, result, timer) or scales
-        if primary_unit and len(scales) > 1:
-            scales.sort(key=lambda s: s.unit != primary_unit)
+        _primary_first(scales, primary_unit)
         return scales
