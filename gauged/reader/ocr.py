@@ -212,13 +212,16 @@ class ScaleTextReader:
                 out += [b for b in self._recognise(image, [quad], circle) if parse_number(b.text)]
         return out
 
-    def read_at_hints(self, image_bgr: np.ndarray, hints: np.ndarray, circle: Circle) -> list[TextBox]:
+    def read_at_hints(self, image_bgr: np.ndarray, hints: np.ndarray, circle: Circle) -> tuple[list[TextBox], bool]:
         """The quick pass: the ink blob at each hint (predicted number centre, px) recognised, all in
-        one batch, no text detection. Returns the readings that parse as numbers."""
+        one batch, no text detection. Returns the readings that parse as numbers, and whether one of
+        them is a single glyph of a turned number (read alone, the "4" of a "40" is a number too)."""
         in_ring = [(hx, hy) for hx, hy in np.asarray(hints, float).reshape(-1, 2) if _in_ring((hx, hy), circle)]
-        boxes = [b for b in self._recognise(image_bgr, _ink_quads(image_bgr, in_ring, circle[2]), circle)
-                 if parse_number(b.text)]
-        return _split_spaced(_dedupe(boxes))
+        inks = _inks(image_bgr, in_ring, circle[2])
+        boxes = [b for b in self._recognise(image_bgr, [quad for quad, _ in inks], circle) if parse_number(b.text)]
+        numbers = _split_spaced(_dedupe(boxes))
+        parts = [quad for quad, turned_part in inks if turned_part]
+        return numbers, any(np.array_equal(t.quad, quad) for t in numbers for quad in parts)
 
     def read_face_texts(self, image_bgr: np.ndarray, circle: Circle, known: Sequence[TextBox]) -> list[TextBox]:
         """After a quick pass: the texts on the whole ring square (one detection) that the quick
@@ -242,11 +245,16 @@ class ScaleTextReader:
 
         Its numbers must form a progression near the ring, and no other numbers may be printed
         outside the ring: those would be a main scale the crop model did not hint (a degF ring
-        around the degC one it did), which only the full pass reads.
+        around the degC one it did), which only the full pass reads. Nor may one of them be a glyph
+        of a turned number read alone (:meth:`read_at_hints`).
         """
         if not self.quick or hints is None or len(hints) < QUICK_ENOUGH:
             return None, []
-        numbers = self.read_at_hints(image_bgr, hints, circle)
+        numbers, turned_part = self.read_at_hints(image_bgr, hints, circle)
+        if turned_part:
+            # Glyphs of a turned "30, 40, 50" read "3, 4, 5" agree on a line ten times too flat (synthetic
+            # fresh13 000296: 86% off); the full pass reads the detector's turned boxes whole.
+            return None, numbers
         # Numbers deep inside the ring belong to an inner, secondary scale: the main scale's numbers
         # were not hinted, so only the full pass can find them.
         near_ring = [t for t in numbers if _main_scale(t, circle)]
@@ -544,17 +552,24 @@ def _hint_window(image: np.ndarray, hx: float, hy: float, r: float) -> tuple[np.
 
 def _ink_quads(image: np.ndarray, points: Sequence[tuple[float, float]], r: float) -> list[np.ndarray]:
     """The quads (image px) of the ink at each point that has some, in the hint window around it."""
-    quads = []
+    return [quad for quad, _ in _inks(image, points, r)]
+
+
+def _inks(image: np.ndarray, points: Sequence[tuple[float, float]], r: float) -> list[tuple[np.ndarray, bool]]:
+    """The quad (image px) of the ink at each point that has some, in the hint window around it, and
+    whether it is one glyph of a turned number (:class:`gauged.reader.ocr_regions.Ink`)."""
+    out = []
     for hx, hy in points:
         window = _hint_window(image, hx, hy, r)
         if window is None:
             continue
         win, x0, y0 = window
-        box = ink_box(win, (hx - x0, hy - y0), r)
-        if box is not None:
-            bx0, by0, bx1, by1 = box
-            quads.append(np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0]))
-    return quads
+        ink = ink_box(win, (hx - x0, hy - y0), r)
+        if ink is not None:
+            bx0, by0, bx1, by1 = ink.box
+            quad = np.float32([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]]) + np.float32([x0, y0])
+            out.append((quad, ink.turned_part))
+    return out
 
 
 def _ring_texts(boxes: Sequence[TextBox], circle: Circle) -> list[TextBox]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -17,10 +18,21 @@ import numpy as np
 from gauged.types import Box
 
 RING = (0.35, 1.45)  # radii (in scale radii) where scale numbers are looked for
+TURNED_GAP = 0.5  # of a glyph's height: a glyph of its size this near, not level with it, is its turned neighbour
+TURNED_SIZE = (0.6, 1.6)  # the neighbour's height, in the glyph's heights
 
 
-def ink_box(window: np.ndarray, point: tuple[float, float], r: float) -> Box | None:
-    """Box (x0, y0, x1, y1) px in ``window`` of the printed characters at ``point``, or None.
+class Ink(NamedTuple):
+    """The printed characters at a point: their ``box`` (x0, y0, x1, y1) px, and whether they are a
+    single glyph with a glyph of its size beside it, not level with it: one character of a number
+    printed turned (the "4" of a "40" at 60 degrees), which reads as a number of its own."""
+
+    box: Box
+    turned_part: bool
+
+
+def ink_box(window: np.ndarray, point: tuple[float, float], r: float) -> Ink | None:
+    """The printed characters at ``point`` (their box in ``window`` px), or None.
 
     Otsu splits the (H, W, 3) window into ink and face (ink is the smaller class); the ink blob
     nearest ``point`` (within 0.1 ``r``) is grown by blobs level with it and at most 0.8 of its height
@@ -62,7 +74,22 @@ def ink_box(window: np.ndarray, point: tuple[float, float], r: float) -> Box | N
                 x0, y0, x1, y1 = min(x0, bx), min(y0, by), max(x1, bx + bw), max(y1, by + bh)
                 grown = True
     pad = 0.25 * (y1 - y0)
-    return (x0 - pad, y0 - pad, x1 + pad, y1 + pad)
+    lone = (x0, y0, x1, y1) == (seed[0], seed[1], seed[0] + seed[2], seed[1] + seed[3])
+    return Ink((x0 - pad, y0 - pad, x1 + pad, y1 + pad), lone and _turned_neighbour(digits, seed))
+
+
+def _turned_neighbour(digits: list[tuple[float, float, float, float]], glyph: tuple[float, float, float, float]) -> bool:
+    """Whether a glyph of ``glyph``'s size lies within :data:`TURNED_GAP` of its height in any
+    direction (blobs as (x, y, w, h); a level neighbour would have been grown into it)."""
+    gx, gy, gw, gh = glyph
+    for bx, by, bw, bh in digits:
+        if (bx, by, bw, bh) == glyph or not TURNED_SIZE[0] * gh <= bh <= TURNED_SIZE[1] * gh:
+            continue
+        dx = max(bx - gx - gw, 0.0, gx - bx - bw)
+        dy = max(by - gy - gh, 0.0, gy - by - bh)
+        if math.hypot(dx, dy) <= TURNED_GAP * gh:
+            return True
+    return False
 
 
 def polar_strip(image_bgr: np.ndarray, circle: tuple[float, float, float], gap_angle: float = math.pi / 2,

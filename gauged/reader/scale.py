@@ -13,6 +13,7 @@ notch to ``max`` at the end notch, no OCR needed.
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections.abc import Sequence
@@ -389,8 +390,9 @@ def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:
         if marker.inlier or marker.angle is None or marker.value == round(marker.value):
             continue
         expected = model.value_at(marker.angle)
-        for factor in (10.0, 100.0):
-            if abs(marker.value * factor - expected) <= DECIMAL_MATCH * step:
+        # a tick read as a minus sign: "-0.5" where the line puts 5
+        for value, factor in itertools.product({marker.value, abs(marker.value)}, (10.0, 100.0)):
+            if abs(value * factor - expected) <= DECIMAL_MATCH * step:
                 return StageFailure(STAGE, "dropped_decimal_point",
                                     f"whole numbers agree, but {marker.text!r} read where the line puts "
                                     f"{expected:.3g}: the scale's decimal points were dropped")

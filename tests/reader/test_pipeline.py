@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -117,6 +118,30 @@ def test_a_refused_scale_gets_a_second_look_at_its_ring_texts():
     reader.ocr.reread_markers = lambda *args, **kwargs: None
     (first,) = reader.read_image(image)
     assert first.value is None and first.failure.stage == "scale"
+
+
+def test_glyphs_of_turned_numbers_do_not_end_the_quick_pass():
+    """A 0..60 degC dial whose gap is at eight o'clock (render 296 of seed 13,000,000): in the gap-down
+    view its upright "30, 40, 50" stand turned by 60 degrees, and the ink at each number peak held
+    one glyph, "3, 4, 5". With the "0" they agreed on a 0..6 scale, 86% off. A glyph read alone with
+    a turned neighbour sends the dial to the full pass, whose detector reads the numbers whole."""
+    from gauged.config.model import ReaderConfig
+    from gauged.reader.factory import build_reader
+    from gauged.reader.ocr_engine import OcrUnavailable
+    from gauged.synth.dataset import render_item
+
+    try:
+        reader = build_reader(ReaderConfig(threads=2))
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR engine not installed ({exc})")
+    image, record, _ = render_item(("crop", 13_000_000, 296, 0, 0, 448, False))
+    image = cv2.imdecode(cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 95])[1], cv2.IMREAD_COLOR)  # as written
+    gauge = record["gauges"][0]
+    assert (gauge["min"], gauge["max"]) == (0.0, 60.0)
+    (read,) = reader.read_image(image)
+    assert read.failure is None, read.failure
+    assert abs(read.value.value - gauge["value"]) <= 0.01 * (gauge["max"] - gauge["min"])
+    assert read.scale.max_value == pytest.approx(60.0, abs=1.0)
 
 
 def test_a_refused_scale_is_read_again_about_the_needle_pivot():

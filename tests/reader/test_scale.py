@@ -74,6 +74,11 @@ def test_whole_numbers_with_a_decimal_one_on_their_line_are_a_dropped_decimal_po
     failure = fit_scales(arc, whole + [decimal])
     assert isinstance(failure, StageFailure)
     assert (failure.stage, failure.reason) == ("scale", "dropped_decimal_point")
+    # a tick before it read as a minus sign ("-0.5") is the same evidence (held-out 000658: "15, 20, 25"
+    # read for 1.5, 2.0, 2.5 and "-0.5" for 0.5 answered 17% off)
+    failure = fit_scales(arc, whole + [ScaleMarker("-0.5", -0.5, decimal.box)])
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "dropped_decimal_point")
     # a decimal elsewhere (an accuracy class "1.6" near the centre) is no such evidence
     (centre,) = _ring(DIAL, values, 0.1, [7])
     scales = fit_scales(arc, whole + [ScaleMarker("1.6", 1.6, centre.box)])
