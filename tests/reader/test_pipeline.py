@@ -144,6 +144,29 @@ def test_glyphs_of_turned_numbers_do_not_end_the_quick_pass():
     assert read.scale.max_value == pytest.approx(60.0, abs=1.0)
 
 
+def test_a_dial_with_its_gap_at_the_top_is_read_the_images_way_up_too():
+    """A 0..400 bar dial whose gap is at the top (held-out render 874 of seed 9,000,000): in the gap-down
+    view its upright numbers stand on their heads and "100, 200, 300" read "10, 20, 30", which with the
+    "0" make a 0..40 line (53% off). Read the image's way up as well, the longer progression wins."""
+    from gauged.config.model import ReaderConfig
+    from gauged.reader.factory import build_reader
+    from gauged.reader.ocr_engine import OcrUnavailable
+    from gauged.synth.dataset import render_item
+
+    try:
+        reader = build_reader(ReaderConfig(threads=2))
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR engine not installed ({exc})")
+    image, record, _ = render_item(("crop", 9_000_000, 874, 0, 0, 448, False))
+    image = cv2.imdecode(cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 95])[1], cv2.IMREAD_COLOR)  # as written
+    gauge = record["gauges"][0]
+    assert (gauge["min"], gauge["max"]) == (0.0, 400.0)
+    (read,) = reader.read_image(image)
+    assert read.failure is None, read.failure
+    assert read.scale.max_value == pytest.approx(400.0, abs=10.0)
+    assert abs(read.value.value - gauge["value"]) <= 0.05 * (gauge["max"] - gauge["min"])
+
+
 def test_a_refused_scale_is_read_again_about_the_needle_pivot():
     """A nearly round 0..300 psi dial seen by a close camera (held-out render 578 of seed 9,000,000,
     axis ratio 0.97): its pivot lies 0.06 radii from the scale ellipse's centre, and about that
