@@ -174,15 +174,20 @@ def test_read_markers_reads_upright_text_of_a_dial_whose_gap_is_not_at_the_botto
             np.array([(m.box[0] + m.box[2]) / 2, (m.box[1] + m.box[3]) / 2]) - c) < 20 for v, c in zip(values, centres)))
 
     assert right(reader.read_markers(img, arc, centres)) >= 4
-    monkeypatch.setattr(ocr, "UPRIGHT_BELOW", 0)  # gap-down view only, as before
+    monkeypatch.setattr(ocr, "UPRIGHT_TURN", math.pi)  # gap-down view only, as before
     read = reader.read_markers(img, arc, centres)
     assert isinstance(read, StageFailure) or right(read) < 3
 
 
-def test_read_markers_keeps_numbers_beyond_an_inferred_gap(reader):
+def test_read_markers_keeps_numbers_beyond_an_inferred_gap(reader, monkeypatch):
     """Ends inferred from a notch gap may cut a full-circle dial's numbers in two (a real dial
     indicator: 8 and 9 fell beyond the gap and were dropped as off the progression). With inferred
-    ends every number read goes on to the scale stage; with found ends the progression filter runs."""
+    ends every number read goes on to the scale stage; with found ends the progression filter runs.
+    (In the gap-down view: the view the image's way up, where this dial's gap really is, would read
+    every number.)"""
+    import gauged.reader.ocr as ocr
+
+    monkeypatch.setattr(ocr, "UPRIGHT_TURN", math.pi)
     values = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]
     img, centres = render_dial(values, unit="")
     e = Ellipse(*CIRCLE[:2], CIRCLE[2], CIRCLE[2], 0.0)
