@@ -26,8 +26,9 @@ from gauged.reader.keypoints import CropKeypoints
 from gauged.types import Ellipse, StageFailure
 
 STAGE = "ellipse"
+NUMBERS_OUTSIDE_SCALE = "numbers_outside_scale"
 REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends", "implausible_span",
-           "numbers_outside_scale")
+           NUMBERS_OUTSIDE_SCALE)
 
 TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
 RMS_FRACTION = 0.02  # of the ring's radius: the notch RMS a fit may have (with a floor of TOLERANCE / 2)
@@ -430,7 +431,8 @@ def _snap(angle: float, notch_angles: np.ndarray) -> float:
 
 
 def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4,
-                  max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35) -> ScaleArc | StageFailure:
+                  max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35,
+                  ends_from_gap: bool = False) -> ScaleArc | StageFailure:
     """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
 
     Failures: ``too_few_notches`` (fewer than ``min_notches`` notch points), ``degenerate_conic``,
@@ -445,6 +447,10 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
 
     Angles are measured about a pivot peak inside the ring when the view is oblique
     (:data:`OBLIQUE_AXIS_RATIO`); :func:`arc_about_pivot` measures them so on any view.
+
+    ``ends_from_gap`` takes the ends from the notches' largest gap whatever the end peaks and the
+    number peaks in that gap say: for a dial whose ends are hidden, read only between its numbers
+    (the pipeline's look after ``numbers_outside_scale``).
     """
     parts = [keypoints.major.points]
     for peaks in (keypoints.start, keypoints.end):
@@ -488,7 +494,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # dial, so the pivot is used only when the view is oblique enough for perspective to matter.
     if ellipse.b / ellipse.a < OBLIQUE_AXIS_RATIO:
         centre = _pivot_inside(keypoints, ellipse) or centre
-    return _arc_about(keypoints, ellipse, points[inliers], rms, rms_limit, centre)
+    return _arc_about(keypoints, ellipse, points[inliers], rms, rms_limit, centre, ends_from_gap)
 
 
 def arc_about_pivot(arc: ScaleArc, keypoints: CropKeypoints) -> ScaleArc | StageFailure | None:
@@ -513,9 +519,15 @@ def _pivot_inside(keypoints: CropKeypoints, ellipse: Ellipse) -> tuple[float, fl
 
 
 def _arc_about(keypoints: CropKeypoints, ellipse: Ellipse, notches: np.ndarray, rms: float, rms_limit: float | None,
-               centre: tuple[float, float]) -> ScaleArc | StageFailure:
+               centre: tuple[float, float], ends_from_gap: bool = False) -> ScaleArc | StageFailure:
     """The scale arc of the ring ``ellipse`` through its inlier ``notches``, with dial angles measured
-    about ``centre``: the ends (found, else inferred from the notches' largest gap) and their checks."""
+    about ``centre``: the ends (found, else inferred from the notches' largest gap) and their checks;
+    with ``ends_from_gap``, the gap's ends and no check of the numbers in it."""
+    if ends_from_gap:
+        ends = _ends_from_gap(dial_angle(ellipse, notches, centre)) if len(notches) >= GAP_MIN_NOTCHES else None
+        if ends is None or not MIN_SPAN <= scale_span(*ends) <= MAX_SPAN:
+            return StageFailure(STAGE, "no_scale_ends", "no gap between the notches stands out as the scale's")
+        return ScaleArc(ellipse, centre, ends[0], ends[1], wrap_angle(*ends), notches, rms, True, rms_limit)
     inferred = not (len(keypoints.start) and len(keypoints.end))
     if inferred:
         if len(notches) < GAP_MIN_NOTCHES:
@@ -544,7 +556,7 @@ def _arc_about(keypoints: CropKeypoints, ellipse: Ellipse, notches: np.ndarray, 
             # the notches holds no number at all, so it is taken as the scale's, as when no end is found.
             start, end = gap
             return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), notches, rms, True, rms_limit)
-        return StageFailure(STAGE, "numbers_outside_scale", f"{in_gap} scale numbers lie in the gap between the scale ends")
+        return StageFailure(STAGE, NUMBERS_OUTSIDE_SCALE, f"{in_gap} scale numbers lie in the gap between the scale ends")
     return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), notches, rms, inferred, rms_limit)
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from gauged.reader.crop import Crop, crop_gauge
 from gauged.reader.detect import GaugeDetector
-from gauged.reader.ellipse import ScaleArc, arc_about_pivot, fit_scale_arc
+from gauged.reader.ellipse import NUMBERS_OUTSIDE_SCALE, ScaleArc, arc_about_pivot, fit_scale_arc
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
 from gauged.reader.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
 from gauged.reader.keypoints import CropKeypoints, Peaks, decode_crop_maps
@@ -35,6 +35,7 @@ NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's numb
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 SECOND_LOOK = ("ocr", "scale")  # refusals of these stages (ocr: only no_numbers) get ScaleTextReader.reread_markers
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
+BETWEEN_NUMBERS = 4  # agreeing numbers a dial with hidden ends needs, the needle between them
 PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a close-up), read again
 
 
@@ -236,6 +237,8 @@ class GaugeReader:
             arc = fit_scale_arc(keypoints, self.crop_size)
         if isinstance(arc, StageFailure):
             result.failure = arc
+            if arc.reason == NUMBERS_OUTSIDE_SCALE and known is None and self.ocr is not None:
+                self._between_numbers(image, crop, keypoints, result, timer)
             return result
         result.arc = arc
         with timer("needle"):
@@ -328,6 +331,45 @@ class GaugeReader:
                 return None
             result.markers, result.unit = read
         return pivoted, needle, scales
+
+    def _between_numbers(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, result: GaugeRead,
+                         timer: _Timer) -> None:
+        """Read a dial refused for numbers in the gap between its scale ends only between the numbers
+        read, into ``result``; or leave the refusal standing.
+
+        Such a dial's ends are often hidden (a box or a pipe across the dial, held-out 000736): the
+        largest gap between the notches is the hidden part, and a number half seen at its edge lies
+        in it. Without its ends the scale's extent is unknown, but a value between two agreeing
+        numbers does not depend on it. So the arc takes the gap's ends (``ends_from_gap``), the scale
+        needs :data:`BETWEEN_NUMBERS` agreeing numbers, and the needle must read between the lowest
+        and highest of them. The scale's ``min`` and ``max`` are then the values at the ends of the
+        visible arc, not the printed range."""
+        with timer("ellipse"):
+            arc = fit_scale_arc(keypoints, self.crop_size, ends_from_gap=True)
+        if isinstance(arc, StageFailure):
+            return
+        with timer("needle"):
+            needle = fit_needle(keypoints.needle_prob, keypoints.stride, arc)
+        if isinstance(needle, StageFailure):
+            return
+        hints = _sure_numbers(keypoints.numbers)
+        with timer("ocr"):
+            read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points, self._detail(image, crop))
+        if isinstance(read, StageFailure):
+            return
+        with timer("scale"):
+            scales = fit_scales(arc, read[0], read[1], min_inliers=BETWEEN_NUMBERS, hints=hints)
+        if isinstance(scales, StageFailure):
+            return
+        with timer("reading"):
+            value = read_value(needle, arc, scales[0], self.min_confidence)
+        if isinstance(value, StageFailure):
+            return
+        agreeing = [m.value for m in scales[0].markers if m.inlier]
+        if not min(agreeing) <= value.value <= max(agreeing):
+            return
+        result.arc, result.needle, result.scales, result.value, result.failure = arc, needle, scales, value, None
+        result.markers, result.unit = read
 
     def _number_net_retry(self, crop: Crop, arc: ScaleArc, number_points: np.ndarray, detail: np.ndarray | None,
                           hints: np.ndarray, timer: _Timer

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gauged.geometry.angles import angle_difference
-from gauged.geometry.angles import unwrap, wrap_angle
+from gauged.geometry.angles import unwrap, wrap_angle, wrap_to_pi
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.ellipse import ScaleArc, fit_scale_arc, notch_grid
 from gauged.types import Ellipse, StageFailure
@@ -121,6 +121,12 @@ def test_fit_scale_arc_numbers_in_the_gap_refute_inferred_ends():
     failure = fit_scale_arc(replace(keypoints, numbers=peaks), CROP)
     assert not failure and failure.reason == "numbers_outside_scale"
     assert fit_scale_arc(keypoints, CROP)  # without the numbers the false gap is accepted
+    # asked for the gap's ends whatever lies in it (a dial whose ends are hidden), it gives them
+    arc = fit_scale_arc(replace(keypoints, numbers=peaks), CROP, ends_from_gap=True)
+    assert arc and arc.ends_inferred
+    first, last = dial.notch_angles()[4], dial.notch_angles()[8]
+    assert abs(wrap_to_pi(arc.start_angle - first)) < math.radians(3)
+    assert abs(wrap_to_pi(arc.end_angle - last)) < math.radians(3)
 
 
 def test_fit_scale_arc_refuses_to_guess_ends_when_no_gap_stands_out():

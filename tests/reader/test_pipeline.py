@@ -167,6 +167,33 @@ def test_a_dial_with_its_gap_at_the_top_is_read_the_images_way_up_too():
     assert abs(read.value.value - gauge["value"]) <= 0.05 * (gauge["max"] - gauge["min"])
 
 
+def test_a_dial_with_hidden_ends_is_read_between_its_numbers():
+    """A 0..0.25 MPa dial with a box across its lower right (held-out render 736 of seed 9,000,000):
+    the largest gap between the notches is the hidden part, and the half-seen "0.25" at its edge is a
+    number in the gap, so the ellipse stage refuses the ends. Read between its agreeing numbers, the
+    value does not depend on them; without that look the dial stays refused."""
+    from gauged.config.model import ReaderConfig
+    from gauged.reader.factory import build_reader
+    from gauged.reader.ocr_engine import OcrUnavailable
+    from gauged.synth.dataset import render_item
+
+    try:
+        reader = build_reader(ReaderConfig(threads=2))
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR engine not installed ({exc})")
+    image, record, _ = render_item(("crop", 9_000_000, 736, 0, 0, 448, False))
+    image = cv2.imdecode(cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 95])[1], cv2.IMREAD_COLOR)  # as written
+    gauge = record["gauges"][0]
+    (read,) = reader.read_image(image)
+    assert read.failure is None, read.failure
+    assert abs(read.value.value - gauge["value"]) <= 0.01 * (gauge["max"] - gauge["min"])
+    agreeing = [m.value for m in read.scale.markers if m.inlier]
+    assert len(agreeing) >= 4 and min(agreeing) <= read.value.value <= max(agreeing)
+    reader._between_numbers = lambda *args, **kwargs: None
+    (first,) = reader.read_image(image)
+    assert first.value is None and (first.failure.stage, first.failure.reason) == ("ellipse", "numbers_outside_scale")
+
+
 def test_a_refused_scale_is_read_again_about_the_needle_pivot():
     """A nearly round 0..300 psi dial seen by a close camera (held-out render 578 of seed 9,000,000,
     axis ratio 0.97): its pivot lies 0.06 radii from the scale ellipse's centre, and about that
