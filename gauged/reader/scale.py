@@ -209,7 +209,13 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
 def agreeing_digit_values(model: ScaleModel) -> list[float]:
     """The values of ``model``'s agreeing numbers that OCR read as digits (no letter taken for one):
     the evidence the scale checks weigh."""
-    return [m.value for m in model.markers if m.inlier and read_as_digits(m.text)]
+    return [m.value for m in model.markers if m.inlier and read_as_digits(m.text) and not _DANGLING.search(m.text)]
+
+
+# A number read with a dangling point ("0.", "20.") is a decimal cut short as often as a number beside
+# a tick: "0." for "-0.3", "1" and "2" for "-0.8", "-0.4" made 0..2.2 of a -1..0 vacuum dial (fresh13
+# 000257, 195% off). It is not evidence: the checks and the minimum count what remains.
+_DANGLING = re.compile(r"\d[.,]\s*$")
 
 
 def _rival(model: ScaleModel) -> StageFailure | None:

@@ -231,3 +231,17 @@ def test_round_step_is_the_largest_round_step_dividing_every_difference(values, 
     from gauged.reader.numbers import round_step
 
     assert round_step(np.array(values)) == pytest.approx(step)
+
+
+def test_a_number_with_a_dangling_point_is_no_evidence():
+    """"0." is as often a decimal cut short ("-0.3") as a "0" beside a tick: "0.", "1" and "2" on a
+    line made a 0..2.2 scale of a -1..0 vacuum dial, 195% off (fresh13 000257). Such a number does not
+    count towards the three agreeing numbers; read "0" it does."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    values = [float(v) for v in range(11)]
+    cut = _ring(DIAL, values, 0.8, [0, 5, 10])
+    cut[0] = ScaleMarker("0.", 0.0, cut[0].box)
+    failure = fit_scales(arc, cut)
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "too_few_inliers")
+    assert not isinstance(fit_scales(arc, _ring(DIAL, values, 0.8, [0, 5, 10])), StageFailure)
