@@ -523,12 +523,8 @@ def _arc_about(keypoints: CropKeypoints, ellipse: Ellipse, notches: np.ndarray, 
     """The scale arc of the ring ``ellipse`` through its inlier ``notches``, with dial angles measured
     about ``centre``: the ends (found, else inferred from the notches' largest gap) and their checks;
     with ``ends_from_gap``, the gap's ends and no check of the numbers in it."""
-    if ends_from_gap:
-        ends = _ends_from_gap(dial_angle(ellipse, notches, centre)) if len(notches) >= GAP_MIN_NOTCHES else None
-        if ends is None or not MIN_SPAN <= scale_span(*ends) <= MAX_SPAN:
-            return StageFailure(STAGE, "no_scale_ends", "no gap between the notches stands out as the scale's")
-        return ScaleArc(ellipse, centre, ends[0], ends[1], wrap_angle(*ends), notches, rms, True, rms_limit)
-    inferred = not (len(keypoints.start) and len(keypoints.end))
+    found_start, found_end = (False, False) if ends_from_gap else (len(keypoints.start) > 0, len(keypoints.end) > 0)
+    inferred = not (found_start and found_end)
     if inferred:
         if len(notches) < GAP_MIN_NOTCHES:
             return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and too few notches to infer them")
@@ -539,12 +535,14 @@ def _arc_about(keypoints: CropKeypoints, ellipse: Ellipse, notches: np.ndarray, 
         gap_start, gap_end = ends
     notch_angles = dial_angle(ellipse, notches, centre)
     start = (_snap(float(dial_angle(ellipse, keypoints.start.points[:1], centre)[0]), notch_angles)
-             if len(keypoints.start) else gap_start)
+             if found_start else gap_start)
     end = (_snap(float(dial_angle(ellipse, keypoints.end.points[:1], centre)[0]), notch_angles)
-           if len(keypoints.end) else gap_end)
+           if found_end else gap_end)
     span = scale_span(start, end)
     if not MIN_SPAN <= span <= MAX_SPAN:
         return StageFailure(STAGE, "implausible_span", f"scale spans {np.degrees(span):.0f} degrees")
+    if ends_from_gap:
+        return ScaleArc(ellipse, centre, start, end, wrap_angle(start, end), notches, rms, True, rms_limit)
     # Ends inferred from the largest gap between notches are only a guess (missed notches make a
     # gap too): then a single number peak of any score in that gap refutes it.
     in_gap = _numbers_in_gap(keypoints, ellipse, centre, start, span, 0.0 if inferred else NUMBER_SCORE)

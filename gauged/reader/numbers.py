@@ -153,6 +153,17 @@ def read_as_digits(text: str) -> bool:
     return bool(parsed) and parsed.confusions == 0
 
 
+# A dangling point ("0.", "20.") parses as tick debris, but it is a decimal cut short as often: "0." for
+# "-0.3", "1" and "2" for "-0.8", "-0.4" made 0..2.2 of a -1..0 vacuum dial (fresh13 000257, 195% off).
+_DANGLING_POINT = re.compile(r"\d[.,]\s*$")
+
+
+def read_whole(text: str) -> bool:
+    """Whether OCR read the number as digits (:func:`read_as_digits`) and whole, with no dangling
+    point: the numbers a scale's evidence is made of."""
+    return read_as_digits(text) and not _DANGLING_POINT.search(text)
+
+
 def merge_fragments(boxes: Sequence[TextBox], gap: float = 0.6, align: float = 0.35) -> list[TextBox]:
     """Join text boxes that are pieces of one number ("0" + ".6", "1" + "6", "-" + "30").
 

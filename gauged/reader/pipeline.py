@@ -316,20 +316,13 @@ class GaugeReader:
             needle = fit_needle(keypoints.needle_prob, keypoints.stride, pivoted)
         if isinstance(needle, StageFailure):
             return None
-        numbers = keypoints.numbers
-        hints = _sure_numbers(numbers)
         with timer("scale"):
-            scales = fit_scales(pivoted, result.markers, result.unit, hints=hints)
+            scales = fit_scales(pivoted, result.markers, result.unit, hints=_sure_numbers(keypoints.numbers))
         if isinstance(scales, StageFailure):
-            with timer("ocr"):
-                read = self.ocr.read_markers(crop.image, pivoted, numbers.points, self._detail(image, crop))
-            if isinstance(read, StageFailure):
+            again = self._read_on(image, crop, keypoints, pivoted, timer)
+            if again is None:
                 return None
-            with timer("scale"):
-                scales = fit_scales(pivoted, read[0], read[1], hints=hints)
-            if isinstance(scales, StageFailure):
-                return None
-            result.markers, result.unit = read
+            (result.markers, result.unit), scales = again
         return pivoted, needle, scales
 
     def _between_numbers(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, result: GaugeRead,
@@ -352,15 +345,10 @@ class GaugeReader:
             needle = fit_needle(keypoints.needle_prob, keypoints.stride, arc)
         if isinstance(needle, StageFailure):
             return
-        hints = _sure_numbers(keypoints.numbers)
-        with timer("ocr"):
-            read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points, self._detail(image, crop))
-        if isinstance(read, StageFailure):
+        again = self._read_on(image, crop, keypoints, arc, timer, min_inliers=BETWEEN_NUMBERS)
+        if again is None:
             return
-        with timer("scale"):
-            scales = fit_scales(arc, read[0], read[1], min_inliers=BETWEEN_NUMBERS, hints=hints)
-        if isinstance(scales, StageFailure):
-            return
+        read, scales = again
         with timer("reading"):
             value = read_value(needle, arc, scales[0], self.min_confidence)
         if isinstance(value, StageFailure):
@@ -370,6 +358,18 @@ class GaugeReader:
             return
         result.arc, result.needle, result.scales, result.value, result.failure = arc, needle, scales, value, None
         result.markers, result.unit = read
+
+    def _read_on(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, timer: _Timer,
+                 min_inliers: int = 3) -> tuple[tuple[list[ScaleMarker], str | None], list[ScaleModel]] | None:
+        """The markers and unit read on the dial rectified by ``arc`` and the scales they give (at least
+        ``min_inliers`` agreeing numbers), or None when the OCR or the scale stage refuses."""
+        with timer("ocr"):
+            read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points, self._detail(image, crop))
+        if isinstance(read, StageFailure):
+            return None
+        with timer("scale"):
+            scales = fit_scales(arc, read[0], read[1], min_inliers=min_inliers, hints=_sure_numbers(keypoints.numbers))
+        return None if isinstance(scales, StageFailure) else (read, scales)
 
     def _number_net_retry(self, crop: Crop, arc: ScaleArc, number_points: np.ndarray, detail: np.ndarray | None,
                           hints: np.ndarray, timer: _Timer

@@ -26,7 +26,7 @@ from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.scale_fit import RING_GAP, fit_angle_value, fit_scale_model, marker_centres, number_rings
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.full_circle import fit_full_circle
-from gauged.reader.numbers import nice_step, read_as_digits, round_step
+from gauged.reader.numbers import nice_step, read_as_digits, read_whole, round_step
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
@@ -207,15 +207,9 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inli
 
 
 def agreeing_digit_values(model: ScaleModel) -> list[float]:
-    """The values of ``model``'s agreeing numbers that OCR read as digits (no letter taken for one):
-    the evidence the scale checks weigh."""
-    return [m.value for m in model.markers if m.inlier and read_as_digits(m.text) and not _DANGLING.search(m.text)]
-
-
-# A number read with a dangling point ("0.", "20.") is a decimal cut short as often as a number beside
-# a tick: "0." for "-0.3", "1" and "2" for "-0.8", "-0.4" made 0..2.2 of a -1..0 vacuum dial (fresh13
-# 000257, 195% off). It is not evidence: the checks and the minimum count what remains.
-_DANGLING = re.compile(r"\d[.,]\s*$")
+    """The values of ``model``'s agreeing numbers read whole as digits (:func:`read_whole`: no letter
+    taken for one, no dangling point): the evidence the scale checks and the minimum count."""
+    return [m.value for m in model.markers if m.inlier and read_whole(m.text)]
 
 
 def _rival(model: ScaleModel) -> StageFailure | None:
