@@ -78,22 +78,22 @@ def run_readings(args: argparse.Namespace) -> int:
     done = {"images": 0, "failed": 0}
 
     def read(label):
-        value, failure = read_one(label)
+        value, failure, unit = read_one(label)
         done["images"] += 1
         done["failed"] += value is None
         if done["images"] % PROGRESS_EVERY == 0 or done["images"] == len(labels):
             log.info("read %d/%d images, %d refused", done["images"], len(labels), done["failed"])
-        return value, failure
+        return value, failure, unit
 
     def read_one(label):
         image = cv2.imread(str(image_path(args.data, label)), cv2.IMREAD_COLOR)
         if image is None:
-            return None, StageFailure("decode", "unreadable", label.image)
+            return None, StageFailure("decode", "unreadable", label.image), None
         reads = reader.read_image(image)
         if isinstance(reads, StageFailure):
-            return None, reads
+            return None, reads, None
         best = reads[0]
-        return (best.value.value, None) if best.value is not None else (None, best.failure)
+        return (best.value.value, None, best.unit) if best.value is not None else (None, best.failure, None)
 
     result = report(evaluate(labels, read))
     print(json.dumps(result, indent=1) if args.json else format_table(result))

@@ -38,6 +38,7 @@ class Label:
     max: float
     number_px: float | None = None  # median height (px) of the main scale's printed numbers, when labelled
     render_scale: float = 1.0  # the share of the image's resolution that was captured (synthetic records)
+    unit: str | None = None  # the main scale's unit when the dial prints it (synthetic records)
 
     @property
     def captured_number_px(self) -> float | None:
@@ -55,6 +56,7 @@ class Outcome:
     label: Label
     value: float | None
     failure: StageFailure | None
+    unit: str | None = None  # the unit the reader gave the reading
 
     @property
     def relative_error(self) -> float | None:
@@ -81,7 +83,13 @@ def _label(item: dict) -> Label:
         return Label(str(item["image"]), float(item["reading"]), float(item["min"]), float(item["max"]))
     gauge = max(item["gauges"], key=lambda g: (g["box"][2] - g["box"][0]) * (g["box"][3] - g["box"][1]))
     return Label(str(item["image"]), float(gauge["value"]), float(gauge["min"]), float(gauge["max"]),
-                 _number_height(gauge), float(item.get("render_scale", 1.0)))
+                 _number_height(gauge), float(item.get("render_scale", 1.0)), _printed_unit(gauge))
+
+
+def _printed_unit(gauge: dict) -> str | None:
+    """The unit of a synthetic gauge's primary scale when it is printed on the dial, else None."""
+    primary = [s for s in gauge.get("scales", ()) if s.get("role") == "primary"]
+    return primary[0]["unit"] if primary and primary[0].get("unit_label") else None
 
 
 def _number_height(gauge: dict) -> float | None:
@@ -132,8 +140,18 @@ def summarize(outcomes: list[Outcome]) -> Summary:
                    dict(sorted(reasons.items())))
 
 
-def evaluate(labels: list[Label], read: Callable[[Label], tuple[float | None, StageFailure | None]]) -> list[Outcome]:
+def evaluate(labels: list[Label], read: Callable[[Label], tuple]) -> list[Outcome]:
+    """Outcomes of ``read(label)``: ``(value, failure)`` or ``(value, failure, unit)``."""
     return [Outcome(label, *read(label)) for label in labels]
+
+
+def unit_counts(outcomes: list[Outcome]) -> dict[str, int]:
+    """Of the readings of dials whose main unit is printed (and labelled): how many carry that unit,
+    another one, or none."""
+    read = [o for o in outcomes if o.value is not None and o.label.unit is not None]
+    right = sum(o.unit == o.label.unit for o in read)
+    none = sum(o.unit is None for o in read)
+    return {"labelled": len(read), "right": right, "wrong": len(read) - right - none, "none": none}
 
 
 def _height_bin(low: float, high: float) -> str:
@@ -149,9 +167,11 @@ def report(outcomes: list[Outcome]) -> dict:
         "needle_off_rest": summarize([o for o in outcomes if not o.label.at_rest]).to_dict(),
         "images": [{"image": o.label.image, "truth": o.label.reading, "value": o.value,
                     "relative_error": o.relative_error, "number_px": o.label.number_px,
-                    "captured_number_px": o.label.captured_number_px,
+                    "captured_number_px": o.label.captured_number_px, "unit": o.unit, "true_unit": o.label.unit,
                     "failure": None if o.failure is None else o.failure.to_dict()} for o in outcomes],
     }
+    if any(o.label.unit is not None for o in outcomes):
+        result["units"] = unit_counts(outcomes)
     if any(o.label.number_px is not None for o in outcomes):
         result["by_number_height"] = {
             _height_bin(low, high): summarize([o for o in outcomes if o.label.number_px is not None
@@ -167,6 +187,10 @@ def format_table(result: dict) -> str:
     for name, s in rows:
         lines.append(f"{name:<19} {s['count']:>6} {s['failure_rate']:>7.1%} {s['mean_relative_error']:>9.2%} "
                      f"{s['median_relative_error']:>8.2%} {s['mean_relative_error_all']:>9.2%} {s['max_relative_error']:>8.2%}")
+    if "units" in result:
+        u = result["units"]
+        lines.append(f"units of the {u['labelled']} readings of dials printing theirs: {u['right']} right, "
+                     f"{u['wrong']} wrong, {u['none']} none")
     reasons = result["all"]["failures_by_reason"]
     if reasons:
         lines.append("failures: " + ", ".join(f"{k} {v}" for k, v in reasons.items()))

@@ -52,7 +52,7 @@ from gauged.reader.numbers import filter_progression, merge_fragments, parse_num
 from gauged.reader.number_net import NumberNet
 from gauged.reader.ocr_engine import DEFAULT_MODEL_PACKAGE, OcrEngine, TextBox, crop_quad
 from gauged.reader.ocr_regions import RING, ink_box, polar_strip
-from gauged.reader.units import match_unit, read_unit
+from gauged.reader.units import PrintedUnit, match_unit, printed_units
 from gauged.types import ScaleMarker, StageFailure
 
 STAGE = "ocr"
@@ -372,8 +372,9 @@ class ScaleTextReader:
             return self.read_markers(crop, arc, hints, detail)
 
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
-                     ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
-        """Scale numbers (markers with boxes in ``crop`` pixels) and the unit of the crop's dial.
+                     ) -> tuple[list[ScaleMarker], tuple[PrintedUnit, ...]] | StageFailure:
+        """Scale numbers (markers with boxes in ``crop`` pixels) and the units printed on the crop's
+        dial (:func:`gauged.reader.units.printed_units`, best read first).
 
         ``arc`` is the fitted scale (ellipse, centre, gap), ``hints`` (N, 2) crop px the crop
         model's number centres (may be empty). With ``progression`` and ends found (not inferred), the
@@ -395,7 +396,7 @@ class ScaleTextReader:
         texts, circle, matrix = view.texts, view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, NO_TEXT, "no text found on the rectified dial")
-        unit = read_unit(texts, circle)
+        units = printed_units(texts, circle)
         markers = scale_markers(texts, circle)
         if not markers:
             return StageFailure(STAGE, NO_NUMBERS, f"{len(texts)} text(s) read, none a scale number: "
@@ -412,7 +413,7 @@ class ScaleTextReader:
             markers = kept + [m for m in markers if m.box not in taken and m.value != round(m.value)
                               and m.box[3] - m.box[1] <= 1.5 * height]
         out = [ScaleMarker(m.text, m.value, _crop_box(matrix, m.box), None, None, m.score) for m in markers]
-        return out, (unit.unit if unit else None)
+        return out, units
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ from gauged.reader.ocr import NO_NUMBERS
 from gauged.reader.onnx_model import OnnxModel, to_model_input
 from gauged.reader.reading import Value, read_value
 from gauged.reader.scale import fit_scales, scale_from_prior
+from gauged.reader.units import PrintedUnit
 from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
 
 
@@ -65,8 +66,9 @@ class ScaleTextReader(Protocol):
     """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.ocr`)."""
 
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
-                     ) -> tuple[list[ScaleMarker], str | None] | StageFailure:
-        """Scale numbers (crop pixels, parsed values) and the unit, or a failure of stage ``ocr``.
+                     ) -> tuple[list[ScaleMarker], tuple[PrintedUnit, ...]] | StageFailure:
+        """Scale numbers (crop pixels, parsed values) and the units printed on the dial, or a failure
+        of stage ``ocr``.
         ``detail`` is the crop's region at a higher resolution, for the text to be read from."""
 
     def reread_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
@@ -102,7 +104,7 @@ class GaugeRead:
     needle: NeedleReading | None = None
     markers: list[ScaleMarker] = field(default_factory=list)
     scales: list[ScaleModel] = field(default_factory=list)
-    unit: str | None = None
+    units: tuple[PrintedUnit, ...] = ()  # the units read on the dial, best first
     value: Value | None = None
     failure: StageFailure | None = None
     seconds: dict[str, float] = field(default_factory=dict)
@@ -110,6 +112,13 @@ class GaugeRead:
     @property
     def scale(self) -> ScaleModel | None:
         return self.scales[0] if self.scales else None
+
+    @property
+    def unit(self) -> str | None:
+        """The primary scale's unit; without a scale, the unit read best on the dial."""
+        if self.scales:
+            return self.scales[0].unit
+        return self.units[0].unit if self.units else None
 
 
 class _Timer:
@@ -272,7 +281,7 @@ class GaugeReader:
         The cheap steady-state path of a fixed camera: crop, crop model, needle, value — no ellipse
         fit, no OCR. ``keypoints.pivot`` is kept so the caller can check the dial has not moved.
         """
-        result = GaugeRead(box=box, score=1.0, arc=arc, scales=[scale], unit=scale.unit)
+        result = GaugeRead(box=box, score=1.0, arc=arc, scales=[scale])
         timer = _Timer(result.seconds)
         if not self._crop_and_keypoints(image, box, result, timer, require_notches=False):
             return result
@@ -317,12 +326,12 @@ class GaugeReader:
         if isinstance(needle, StageFailure):
             return None
         with timer("scale"):
-            scales = fit_scales(pivoted, result.markers, result.unit, hints=_sure_numbers(keypoints.numbers))
+            scales = fit_scales(pivoted, result.markers, result.units, hints=_sure_numbers(keypoints.numbers))
         if isinstance(scales, StageFailure):
             again = self._read_on(image, crop, keypoints, pivoted, timer)
             if again is None:
                 return None
-            (result.markers, result.unit), scales = again
+            (result.markers, result.units), scales = again
         return pivoted, needle, scales
 
     def _between_numbers(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, result: GaugeRead,
@@ -357,11 +366,11 @@ class GaugeReader:
         if not min(agreeing) <= value.value <= max(agreeing):
             return
         result.arc, result.needle, result.scales, result.value, result.failure = arc, needle, scales, value, None
-        result.markers, result.unit = read
+        result.markers, result.units = read
 
     def _read_on(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, timer: _Timer,
-                 min_inliers: int = 3) -> tuple[tuple[list[ScaleMarker], str | None], list[ScaleModel]] | None:
-        """The markers and unit read on the dial rectified by ``arc`` and the scales they give (at least
+                 min_inliers: int = 3) -> tuple[tuple[list[ScaleMarker], tuple[PrintedUnit, ...]], list[ScaleModel]] | None:
+        """The markers and units read on the dial rectified by ``arc`` and the scales they give (at least
         ``min_inliers`` agreeing numbers), or None when the OCR or the scale stage refuses."""
         with timer("ocr"):
             read = self.ocr.read_markers(crop.image, arc, keypoints.numbers.points, self._detail(image, crop))
@@ -373,8 +382,8 @@ class GaugeReader:
 
     def _number_net_retry(self, crop: Crop, arc: ScaleArc, number_points: np.ndarray, detail: np.ndarray | None,
                           hints: np.ndarray, timer: _Timer
-                          ) -> tuple[tuple[list[ScaleMarker], str | None], list[ScaleModel]] | None:
-        """The markers, unit and scales of the dial read again with the number net, which misreads
+                          ) -> tuple[tuple[list[ScaleMarker], tuple[PrintedUnit, ...]], list[ScaleModel]] | None:
+        """The markers, units and scales of the dial read again with the number net, which misreads
         half as many small numbers as PP-OCR (docs/ocr.md), or None. Only a refused scale gets this
         read, and the refusal stands unless the scale stage accepts what it reads and the scale does
         not cross zero: the net drops minus signs."""
@@ -388,7 +397,8 @@ class GaugeReader:
             return None
         return again, scales
 
-    def _hint_look(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, unit: str | None,
+    def _hint_look(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc,
+                   units: tuple[PrintedUnit, ...],
                    hints: np.ndarray, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | None:
         """The scales of the numbers the number net reads at the crop model's number peaks
         (:mod:`gauged.reader.hint_numbers`), or None: a last look at a dial whose text the OCR could
@@ -401,10 +411,10 @@ class GaugeReader:
         if not markers:
             return None
         with timer("scale"):
-            scales = fit_scales(arc, markers, unit, min_inliers=MIN_HINT_NUMBERS, hints=hints)
+            scales = fit_scales(arc, markers, units, min_inliers=MIN_HINT_NUMBERS, hints=hints)
         if isinstance(scales, StageFailure) or _across_zero(scales[0]):
             return None
-        result.markers, result.unit = markers, unit
+        result.markers, result.units = markers, units
         return scales
 
     def _detail(self, image: np.ndarray, crop: Crop) -> np.ndarray | None:
@@ -439,7 +449,6 @@ class GaugeReader:
     def _scales(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, known: KnownScale | None,
                 primary_unit: str | None, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | StageFailure:
         if known is not None:
-            result.unit = known.unit
             return [scale_from_prior(arc, known.min_value, known.max_value, known.unit)]
         if self.ocr is None:
             return StageFailure("ocr", OCR_UNAVAILABLE, "no OCR engine and no configured scale")
@@ -450,17 +459,17 @@ class GaugeReader:
             read = self.ocr.read_markers(crop.image, arc, numbers.points, detail)
         if isinstance(read, StageFailure):
             if read.reason != NO_NUMBERS:
-                return self._hint_look(image, crop, keypoints, arc, None, hints, result, timer) or read
-            unit, scales = None, read  # texts but no number: the second look below may find some
+                return self._hint_look(image, crop, keypoints, arc, (), hints, result, timer) or read
+            units, scales = (), read  # texts but no number: the second look below may find some
         else:
-            result.markers, unit = read
+            result.markers, units = read
             with timer("scale"):
-                scales = fit_scales(arc, result.markers, unit, hints=hints)
+                scales = fit_scales(arc, result.markers, units, hints=hints)
             if isinstance(scales, StageFailure) and scales.stage == "scale" and self.ocr.has_number_net:
                 retried = self._number_net_retry(crop, arc, numbers.points, detail, hints, timer)
                 if retried is not None:
-                    (result.markers, unit), scales = retried
-        result.unit = unit
+                    (result.markers, units), scales = retried
+        result.units = units
         if isinstance(scales, StageFailure) and scales.stage in SECOND_LOOK:
             # The numbers read gave no scale: look again for the grid the ring's texts most likely
             # print (gauged.reader.likely_scale). Only refusals get this look, and the original
@@ -469,10 +478,10 @@ class GaugeReader:
                 again = self.ocr.reread_markers(crop.image, arc, numbers.points, detail)
             if again:
                 with timer("scale"):
-                    retry = fit_scales(arc, again, unit, hints=hints)
+                    retry = fit_scales(arc, again, units, hints=hints)
                 if not isinstance(retry, StageFailure):
                     result.markers, scales = again, retry
         if isinstance(scales, StageFailure):
-            return self._hint_look(image, crop, keypoints, arc, unit, hints, result, timer) or scales
+            return self._hint_look(image, crop, keypoints, arc, units, hints, result, timer) or scales
         _primary_first(scales, primary_unit)
         return scales

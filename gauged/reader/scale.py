@@ -27,6 +27,8 @@ from gauged.geometry.scale_fit import RING_GAP, fit_angle_value, fit_scale_model
 from gauged.reader.ellipse import ScaleArc
 from gauged.reader.full_circle import fit_full_circle
 from gauged.reader.numbers import nice_step, read_as_digits, read_whole, round_step
+from gauged.reader.scale_units import label_scales
+from gauged.reader.units import PrintedUnit
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
@@ -59,9 +61,11 @@ def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: st
     return ScaleModel(arc.ellipse, slope, min_value - slope * start, arc.zero_angle, min_value, max_value, unit)
 
 
-def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None = None,
+def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[PrintedUnit] = (),
                min_inliers: int = 3, hints: np.ndarray | None = None) -> list[ScaleModel] | StageFailure:
-    """Fit one scale per ring of numbers (:func:`number_rings`), outer ring first.
+    """Fit one scale per ring of numbers (:func:`number_rings`), outer ring first, each in the unit
+    printed for it (:func:`gauged.reader.scale_units.label_scales`; ``units`` are the units read on
+    the dial, best first).
 
     A scale must have ``min_inliers`` consistent numbers, increase clockwise and reach both scale
     ends. When the outer ring of a dual-scale dial yields no scale, its failure is returned even
@@ -78,19 +82,19 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")
     whole: ScaleModel | StageFailure | None = None
     if len(rings) == 2:
-        whole = _fit_ring(arc, markers, unit, min_inliers)
+        whole = _fit_ring(arc, markers, min_inliers)
         if not isinstance(whole, StageFailure) and _spans_both(whole, rings):
-            return [whole]  # one scale whose numbers only looked like two rings (a skewed ellipse)
+            return label_scales([whole], units)  # one scale whose numbers only looked like two rings (a skewed ellipse)
     lone = len(rings) == 1
-    outer = _fit_ring(arc, rings[0], unit, min_inliers)
+    outer = _fit_ring(arc, rings[0], min_inliers)
     if isinstance(outer, StageFailure):
-        rescued = _rescue(arc, markers, rings, whole, unit)
+        rescued = _rescue(arc, markers, rings, whole)
         if rescued is None:
             return outer if lone else replace(outer, detail=f"outer scale: {outer.detail}")
         scales, lone = [rescued], True  # checked as a lone ring is
     else:
         scales = [outer]
-        inner = None if lone else _fit_ring(arc, rings[1], unit, min_inliers)
+        inner = None if lone else _fit_ring(arc, rings[1], min_inliers)
         if inner is not None and not isinstance(inner, StageFailure):
             scales.append(inner)
     if lone:  # a lone ring must be the main scale, and the printed numbers must agree
@@ -99,11 +103,11 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], unit: str | None =
             failure = _off_grid(arc, scales[0], hints)
         if failure is not None:
             return failure
-    return scales
+    return label_scales(scales, units)
 
 
 def _rescue(arc: ScaleArc, markers: list[ScaleMarker], rings: list[list[ScaleMarker]],
-            whole: ScaleModel | StageFailure | None, unit: str | None) -> ScaleModel | None:
+            whole: ScaleModel | StageFailure | None) -> ScaleModel | None:
     """A scale for numbers whose outer ring gave none, or None.
 
     A lone ring may be a full-circle scale: ends inferred inside a scale that has none cut its
@@ -112,7 +116,7 @@ def _rescue(arc: ScaleArc, markers: list[ScaleMarker], rings: list[list[ScaleMar
     nearer the centre than "100, 200": synthetic dev 000077).
     """
     if len(rings) == 1:
-        return fit_full_circle(arc, markers, unit)
+        return fit_full_circle(arc, markers, None)
     if whole is not None and not isinstance(whole, StageFailure) and _from_ring(whole, rings[0]) >= 2:
         return whole
     return None
@@ -178,8 +182,8 @@ def _from_ring(model: ScaleModel, ring: list[ScaleMarker]) -> int:
     return sum(m.box in boxes for m in model.markers if m.inlier)
 
 
-def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], unit: str | None, min_inliers: int) -> ScaleModel | StageFailure:
-    model = fit_scale_model(arc.ellipse, ring, arc.start_angle, arc.end_angle, unit=unit, centre=arc.centre,
+def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int) -> ScaleModel | StageFailure:
+    model = fit_scale_model(arc.ellipse, ring, arc.start_angle, arc.end_angle, centre=arc.centre,
                             min_inliers=min(min_inliers, max(2, len(ring))), expected_sign=1)
     if isinstance(model, StageFailure):
         return model

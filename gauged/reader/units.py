@@ -126,17 +126,40 @@ def match_unit(text: str) -> UnitMatch | StageFailure:
     return _fail("no_unit", f"{text!r} names no known unit")
 
 
-def read_unit(boxes: Sequence[TextBox], circle: tuple[float, float, float] | None = None) -> UnitMatch | None:
-    """The dial's unit from all its texts: the best match by score x OCR score, nearer the dial
-    centre first on ties (units are printed on the face, inside the scale). None when no text
-    names a unit."""
-    found = []
+@dataclass(frozen=True, slots=True)
+class PrintedUnit:
+    """A unit read on a dial: canonical ``unit``, ``score`` (match x OCR score) and ``radius``, the
+    distance of its text from the dial centre in scale radii (None when the circle is unknown)."""
+
+    unit: str
+    score: float
+    radius: float | None = None
+
+
+def printed_units(boxes: Sequence[TextBox], circle: tuple[float, float, float] | None = None
+                  ) -> tuple[PrintedUnit, ...]:
+    """Every distinct unit the dial's texts name, each by its best text, best first: by score x OCR
+    score, nearer the dial centre first on ties (units are printed on the face, inside the scale).
+    Empty when no text names a unit. Which one names which scale: :mod:`gauged.reader.scale_units`."""
+    best: dict[str, tuple[float, float, PrintedUnit]] = {}
     for b in boxes:
         m = match_unit(b.text)
         if not m:
             continue
-        d = 0.0 if circle is None else math.dist(b.center, circle[:2]) / circle[2]
-        found.append((m.score * b.score, -d, m))
-    if not found:
-        return None
-    return max(found, key=lambda t: (t[0], t[1]))[2]
+        radius = None if circle is None else math.dist(b.center, circle[:2]) / circle[2]
+        key = (m.score * b.score, -(radius or 0.0))
+        if m.unit not in best or key > best[m.unit][:2]:
+            best[m.unit] = (*key, PrintedUnit(m.unit, m.score * b.score, radius))
+    return tuple(entry[2] for entry in sorted(best.values(), key=lambda e: e[:2], reverse=True))
+
+
+# canonical unit -> (quantity, size of one unit in the quantity's base unit): scales of one quantity
+# convert by the ratio of their sizes (temperature scales also by an offset, which slopes do not see)
+UNIT_SIZE: dict[str, tuple[str, float]] = {
+    "Pa": ("pressure", 1.0), "kPa": ("pressure", 1e3), "MPa": ("pressure", 1e6), "mbar": ("pressure", 100.0),
+    "bar": ("pressure", 1e5), "psi": ("pressure", 6894.757), "kg/cm2": ("pressure", 98066.5),
+    "inHg": ("pressure", 3386.389), "mmHg": ("pressure", 133.3224), "inH2O": ("pressure", 249.0889),
+    "mmH2O": ("pressure", 9.80665),
+    "degC": ("temperature", 1.0), "degF": ("temperature", 5.0 / 9.0),
+    "km/h": ("speed", 1.0), "knots": ("speed", 1.852),
+}

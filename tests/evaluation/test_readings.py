@@ -62,3 +62,20 @@ def test_synthetic_labels_break_the_table_down_by_printed_number_height(tmp_path
     assert "numbers >= 18 px" in format_table(result)
     # the real dev format has no number boxes: no breakdown
     assert "by_number_height" not in report(evaluate([Label("x.jpg", 1.0, 0.0, 2.0)], lambda label: (1.0, None)))
+
+
+def test_units_of_readings_are_counted_where_the_dial_prints_its_unit(tmp_path):
+    record = {"image": "a.jpg", "gauges": [{"box": [0, 0, 10, 10], "value": 1.0, "min": 0.0, "max": 2.0, "scales": [
+        {"role": "primary", "unit": "psi", "unit_label": {"text": "PSI"}},
+        {"role": "secondary", "unit": "bar", "unit_label": {"text": "bar"}}]}]}
+    unprinted = dict(record, image="b.jpg")
+    unprinted["gauges"] = [dict(record["gauges"][0], scales=[{"role": "primary", "unit": "bar", "unit_label": None}])]
+    (tmp_path / "labels.jsonl").write_text("\n".join(json.dumps(r) for r in (record, unprinted)) + "\n")
+    labels = load_labels(tmp_path)
+    assert [l.unit for l in labels] == ["psi", None]
+    answers = {"a.jpg": (1.0, None, "bar"), "b.jpg": (1.0, None, "bar")}
+    result = report(evaluate(labels, lambda label: answers[label.image]))
+    assert result["units"] == {"labelled": 1, "right": 0, "wrong": 1, "none": 0}
+    assert "1 wrong" in format_table(result)
+    result = report(evaluate(labels[:1], lambda label: (None, StageFailure("ocr", "no_text"))))
+    assert result["units"] == {"labelled": 0, "right": 0, "wrong": 0, "none": 0}

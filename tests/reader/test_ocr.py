@@ -16,7 +16,7 @@ from gauged.reader.ellipse import ScaleArc
 from gauged.reader.numbers import merge_fragments, parse_number
 from gauged.reader.ocr_engine import (OcrEngine, OcrUnavailable, ctc_greedy, ctc_log_likelihood, db_boxes, find_model_files,
                                       order_quad)
-from gauged.reader.units import read_unit
+from gauged.reader.units import printed_units
 from gauged.types import Ellipse, StageFailure
 
 INSTALL = "pip install --no-deps rapidocr==3.10.0 (or rapidocr-onnxruntime==1.4.4)"
@@ -95,7 +95,7 @@ def test_read_upright_numbers_at_their_places(reader):
     texts = reader.read(img, CIRCLE)
     good, wrong = matched(read_numbers(texts), values, centres)
     assert good >= 10 and not wrong, (good, wrong, [t.text for t in texts])
-    assert read_unit(texts, CIRCLE).unit == "bar"
+    assert [u.unit for u in printed_units(texts, CIRCLE)] == ["bar"]
 
 
 def test_read_decimals_and_negative_numbers(reader):
@@ -104,7 +104,7 @@ def test_read_decimals_and_negative_numbers(reader):
     texts = reader.read(img, CIRCLE)
     good, wrong = matched(read_numbers(texts), values, centres)
     assert good >= 7 and not wrong, (good, wrong, [t.text for t in texts])
-    assert read_unit(texts, CIRCLE).unit == "MPa"
+    assert [u.unit for u in printed_units(texts, CIRCLE)] == ["MPa"]
 
 
 def test_read_dial_turns_radially_printed_numbers_upright(reader):

@@ -12,6 +12,7 @@ import pytest
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.ellipse import fit_scale_arc
 from gauged.reader.scale import fit_scales
+from gauged.reader.units import PrintedUnit
 from gauged.types import ScaleMarker, StageFailure
 
 from .dial_maps import CROP, Dial, keypoints_for
@@ -46,6 +47,14 @@ def test_the_outer_ring_is_the_primary_scale(outer_radius, inner_radius):
     scales = fit_scales(arc, markers)
     assert not isinstance(scales, StageFailure), scales
     assert [round(s.max_value, 3) for s in scales] == [10.0, 150.0]
+
+
+def test_each_scale_of_a_dual_scale_dial_is_in_its_own_unit():
+    # psi was read best, but 0..10 outside and 0..150 inside convert as bar and psi (docs/ocr.md, units)
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    markers = _ring(DIAL, PSI, 0.75, [0, 2, 4, 6, 8, 10]) + _ring(DIAL, BAR, 1.15, [0, 2, 4, 6, 8, 10])
+    scales = fit_scales(arc, markers, (PrintedUnit("psi", 0.99, 0.4), PrintedUnit("bar", 0.9, 0.3)))
+    assert [(round(s.max_value, 3), s.unit) for s in scales] == [(10.0, "bar"), (150.0, "psi")]
 
 
 def test_an_unreadable_outer_ring_is_refused_not_answered_with_the_inner_scale():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gauged.reader.ocr_engine import TextBox
-from gauged.reader.units import match_unit, read_unit
+from gauged.reader.units import match_unit, printed_units
 
 
 @pytest.mark.parametrize("text,unit", [
@@ -41,8 +41,17 @@ def test_match_unit_scores_exact_over_fuzzy_and_lone_letters_lowest():
     assert match_unit("°C").score > match_unit("C").score
 
 
-def test_read_unit_prefers_the_confident_spelled_out_unit():
+def test_printed_units_name_each_unit_once_by_its_best_text():
     q = np.float32([[0, 0], [10, 0], [10, 5], [0, 5]])
     boxes = [TextBox("C", 0.99, q + 50), TextBox("°C", 0.95, q + 100), TextBox("WIKA", 0.99, q)]
-    assert read_unit(boxes).unit == "degC" and read_unit(boxes).text == "°C"
-    assert read_unit([TextBox("WIKA", 0.9, q)]) is None
+    (unit,) = printed_units(boxes)
+    assert unit.unit == "degC" and unit.score == pytest.approx(match_unit("°C").score * 0.95)
+    assert printed_units([TextBox("WIKA", 0.9, q)]) == ()
+
+
+def test_printed_units_come_best_read_first_with_their_distance_from_the_centre():
+    q = np.float32([[0, 0], [10, 0], [10, 4], [0, 4]])
+    boxes = [TextBox("psi", 0.9, q + [95, 145]), TextBox("bar", 0.99, q + [95, 125])]
+    units = printed_units(boxes, (100.0, 100.0, 50.0))
+    assert [u.unit for u in units] == ["bar", "psi"]
+    assert [u.radius for u in units] == [pytest.approx(27 / 50), pytest.approx(47 / 50)]
