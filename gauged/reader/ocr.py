@@ -136,7 +136,8 @@ class ScaleTextReader:
         """Every text read on (H, W, 3) uint8 BGR ``image_bgr``, quads in its pixel coordinates.
 
         With ``circle = (cx, cy, r)`` (px) detection is limited to the square around the ring
-        :data:`RING` and texts whose centres fall outside the ring are dropped. ``hints`` (N, 2) px
+        :data:`RING` and texts whose centres fall outside the ring are dropped, except units: a dial
+        prints its unit anywhere on the face, often nearer the centre than the ring. ``hints`` (N, 2) px
         are predicted number centres: each one no read number explains is read again
         (:meth:`_read_hints`). ``known`` are texts already read (the quick pass's), kept and not re-read.
         """
@@ -151,7 +152,7 @@ class ScaleTextReader:
             quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
             boxes = self._recognise(image_bgr, quads, circle)
         if circle is not None:
-            boxes = _ring_texts(boxes, circle)
+            boxes = _ring_texts(boxes, circle) + [b for b in boxes if not _in_ring(b.center, circle) and match_unit(b.text)]
         boxes += list(known)
         if hints is not None and len(hints) and circle is not None and self.use_hints:
             boxes += self._read_hints(image_bgr, np.asarray(hints, float), boxes, circle)

@@ -35,7 +35,7 @@ def reader():
 
 
 def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), scale=0.9, unit="bar",
-                radius=0.78, img=None, start_deg=135.0):
+                radius=0.78, img=None, start_deg=135.0, unit_radius=0.45):
     """A rectified dial: ticks on CIRCLE, numbers at ``radius`` r (0.78) over 270 degrees clockwise
     from ``start_deg`` (lower left: the gap at the bottom), upright or radial (tops outward), drawn on
     a new face or on ``img``. Returns image and number centres."""
@@ -62,7 +62,8 @@ def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), sc
         centres.append(c)
     if unit:
         (w, h), _ = cv2.getTextSize(unit, cv2.FONT_HERSHEY_SIMPLEX, 0.8, 2)
-        cv2.putText(img, unit, (int(cx - w / 2), int(cy + 0.45 * r)), cv2.FONT_HERSHEY_SIMPLEX, 0.8, ink, 2, cv2.LINE_AA)
+        cv2.putText(img, unit, (int(cx - w / 2), int(cy + unit_radius * r + h / 2)), cv2.FONT_HERSHEY_SIMPLEX, 0.8, ink,
+                    2, cv2.LINE_AA)
     return img, np.array(centres)
 
 
@@ -96,6 +97,13 @@ def test_read_upright_numbers_at_their_places(reader):
     good, wrong = matched(read_numbers(texts), values, centres)
     assert good >= 10 and not wrong, (good, wrong, [t.text for t in texts])
     assert [u.unit for u in printed_units(texts, CIRCLE)] == ["bar"]
+
+
+def test_a_unit_printed_near_the_centre_is_read(reader):
+    # inside the ring's 0.35 r, where the full pass drops other texts (the synthetic engine's main unit)
+    img, _ = render_dial([0, 10, 20, 30, 40, 50], unit="kPa", unit_radius=0.22)
+    units = printed_units(reader.read(img, CIRCLE), CIRCLE)
+    assert [u.unit for u in units] == ["kPa"] and units[0].radius == pytest.approx(0.22, abs=0.05)
 
 
 def test_read_decimals_and_negative_numbers(reader):
