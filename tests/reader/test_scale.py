@@ -5,15 +5,16 @@ inner (secondary) scale's value."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.ellipse import fit_scale_arc
-from gauged.reader.scale import fit_scales
+from gauged.reader.scale import fit_scales, with_round_ends
 from gauged.reader.units import PrintedUnit
-from gauged.types import ScaleMarker, StageFailure
+from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 from .dial_maps import CROP, Dial, keypoints_for
 
@@ -254,3 +255,31 @@ def test_a_number_with_a_dangling_point_is_no_evidence():
     assert isinstance(failure, StageFailure)
     assert (failure.stage, failure.reason) == ("scale", "too_few_inliers")
     assert not isinstance(fit_scales(arc, _ring(DIAL, values, 0.8, [0, 5, 10])), StageFailure)
+
+
+def _line_through(arc, low: float, high: float, values: list[float]) -> ScaleModel:
+    """A fitted scale whose line puts ``low`` and ``high`` at the arc's ends, with agreeing numbers
+    ``values`` on the line."""
+    zero = arc.zero_angle
+    model = ScaleModel(arc.ellipse, 1.0, 0.0, zero, low, high)
+    u0, u1 = model.unwrap(arc.start_angle), model.unwrap(arc.end_angle)
+    slope = (high - low) / (u1 - u0)
+    intercept = low - slope * u0
+    markers = tuple(ScaleMarker(f"{v:g}", v, (0, 0, 1, 1), (v - intercept) / slope, True) for v in values)
+    return ScaleModel(arc.ellipse, slope, intercept, zero, low, high, markers=markers, inliers=len(values))
+
+
+def test_a_line_that_puts_the_scale_ends_near_round_values_is_fitted_with_them():
+    # numbers 200..1000 whose line says 13.3 at the start notch and 998.7 at the end (a real 0..1000 kPa
+    # dial read 15.7 at rest): each end counts as a number at 0 and 1000
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    fitted = _line_through(arc, 13.3, 998.7, [200.0, 400.0, 600.0, 800.0, 1000.0])
+    pinned = with_round_ends(arc, fitted)
+    assert abs(pinned.min_value) < 0.6 * 13.3 and abs(pinned.max_value - 1000.0) < 1.3
+    assert pinned.value_at(arc.start_angle) == pytest.approx(pinned.min_value)
+    # ends a third of a step off a round value are not evidence of where the scale starts
+    assert with_round_ends(arc, _line_through(arc, 70.0, 1000.0, [200.0, 400.0, 600.0])) == \
+        _line_through(arc, 70.0, 1000.0, [200.0, 400.0, 600.0])
+    # nor are ends inferred from a gap between notches (hidden ends, or a guess)
+    inferred = replace(arc, ends_inferred=True)
+    assert with_round_ends(inferred, fitted) == fitted
