@@ -50,8 +50,8 @@ GRID_MAX_STEPS = 50  # round steps between a scale's lowest and highest agreeing
 TURN_TOLERANCE = math.radians(6.0)  # dial angle: how near a number a turn on must lie to where the line puts it
 TURN_STEPS = 2.5  # ... and how many of the agreeing numbers' steps past the fitted ends its value may be
 ROUND_END = 0.25  # of the number step: how near whole multiples the numbers' line must put both scale ends
-END_WEIGHT = 1.0  # how many numbers each end counts as in the line fitted again through them (dev sets,
-# session 22: 0.5, 1, 2 gave 300 renders a mean error of 0.327, 0.329, 0.331%, the 21 real photos 0.55, 0.50, 0.46%)
+END_WEIGHT = 2.0  # how many numbers each end counts as in the line fitted again through them (dev sets,
+# session 22: 0.5, 1, 2 gave 300 renders a mean error of 0.327, 0.329, 0.330%, the 21 real photos 0.55, 0.50, 0.46%)
 PAST_END = 0.5  # of the fitted range: an agreeing number this far past a scale end refutes the fit (1,308 reads
 # of dev300, fresh300, held-out and the 21 real photos: right ones <= 0.35, the wild 000516 1.58)
 
@@ -118,9 +118,8 @@ def with_round_ends(arc: ScaleArc, model: ScaleModel) -> ScaleModel:
     notches are where the crop model finds them. On real photos the numbers' line alone lands off
     those values (a 0..1000 kPa dial: 13.3..998.7, reading 15.7 at rest for 0): printed numbers sit
     a degree or two off their notches, and the line extrapolates that to the ends. Each end counts
-    as :data:`END_WEIGHT` numbers, a hedge between the numbers and the ends, since on renders the
-    numbers sit on their notches and the end peaks carry their own error (docs/accuracy.md, session
-    22). Not for ends inferred from a notch gap (a guess, or the edge of what is visible) nor for a
+    as :data:`END_WEIGHT` numbers, a hedge between the numbers and the ends: on renders the numbers
+    sit on their notches and the end peaks carry their own error (docs/accuracy.md, session 22). Not for ends inferred from a notch gap (a guess, or the edge of what is visible) nor for a
     full-circle scale, which has no ends.
     """
     if arc.ends_inferred or model.full_circle:
