@@ -138,8 +138,8 @@ def with_round_ends(arc: ScaleArc, model: ScaleModel) -> ScaleModel:
     weights = np.sqrt(np.concatenate([np.ones(len(agreeing)), [END_WEIGHT, END_WEIGHT]]))
     design = np.stack([angles, np.ones_like(angles)], axis=1) * weights[:, None]
     (slope, intercept), *_ = np.linalg.lstsq(design, values * weights, rcond=None)
-    low, high = slope * ends + intercept
-    return replace(model, slope=float(slope), intercept=float(intercept), min_value=float(low), max_value=float(high))
+    low, high = (round(float(v), 12) + 0.0 for v in slope * ends + intercept)  # no float noise: 0..16, not 1e-14..16
+    return replace(model, slope=float(slope), intercept=float(intercept), min_value=low, max_value=high)
 
 
 def _rescue(arc: ScaleArc, markers: list[ScaleMarker], rings: list[list[ScaleMarker]],

@@ -277,6 +277,9 @@ def test_a_line_that_puts_the_scale_ends_near_round_values_is_fitted_with_them()
     pinned = with_round_ends(arc, fitted)
     assert abs(pinned.min_value) < 0.6 * 13.3 and abs(pinned.max_value - 1000.0) < 1.3
     assert pinned.value_at(arc.start_angle) == pytest.approx(pinned.min_value)
+    # ends the numbers already put on round values stay exactly there, without float noise
+    exact = with_round_ends(arc, _line_through(arc, 0.0, 16.0, [4.0, 8.0, 12.0, 16.0]))
+    assert (exact.min_value, exact.max_value) == (0.0, 16.0)
     # ends a third of a step off a round value are not evidence of where the scale starts
     assert with_round_ends(arc, _line_through(arc, 70.0, 1000.0, [200.0, 400.0, 600.0])) == \
         _line_through(arc, 70.0, 1000.0, [200.0, 400.0, 600.0])
