@@ -62,11 +62,14 @@ def _progress(read: "GaugeRead") -> int:
     return STAGE_ORDER.index(read.failure.stage) if read.failure.stage in STAGE_ORDER else 0
 
 
+MarkersRead = tuple[list[ScaleMarker], tuple[PrintedUnit, ...]]  # the OCR stage's numbers and the units printed
+
+
 class ScaleTextReader(Protocol):
     """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.ocr`)."""
 
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
-                     ) -> tuple[list[ScaleMarker], tuple[PrintedUnit, ...]] | StageFailure:
+                     ) -> MarkersRead | StageFailure:
         """Scale numbers (crop pixels, parsed values) and the units printed on the dial, or a failure
         of stage ``ocr``.
         ``detail`` is the crop's region at a higher resolution, for the text to be read from."""
@@ -369,7 +372,7 @@ class GaugeReader:
         result.markers, result.units = read
 
     def _read_on(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, timer: _Timer,
-                 min_inliers: int = 3) -> tuple[tuple[list[ScaleMarker], tuple[PrintedUnit, ...]], list[ScaleModel]] | None:
+                 min_inliers: int = 3) -> tuple[MarkersRead, list[ScaleModel]] | None:
         """The markers and units read on the dial rectified by ``arc`` and the scales they give (at least
         ``min_inliers`` agreeing numbers), or None when the OCR or the scale stage refuses."""
         with timer("ocr"):
@@ -382,7 +385,7 @@ class GaugeReader:
 
     def _number_net_retry(self, crop: Crop, arc: ScaleArc, number_points: np.ndarray, detail: np.ndarray | None,
                           hints: np.ndarray, timer: _Timer
-                          ) -> tuple[tuple[list[ScaleMarker], tuple[PrintedUnit, ...]], list[ScaleModel]] | None:
+                          ) -> tuple[MarkersRead, list[ScaleModel]] | None:
         """The markers, units and scales of the dial read again with the number net, which misreads
         half as many small numbers as PP-OCR (docs/ocr.md), or None. Only a refused scale gets this
         read, and the refusal stands unless the scale stage accepts what it reads and the scale does
