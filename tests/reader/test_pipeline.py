@@ -197,3 +197,15 @@ def test_a_refused_scale_is_read_again_about_the_needle_pivot():
     reader._about_pivot = lambda *args, **kwargs: None
     (first,) = reader.read_image(image)
     assert first.value is None and first.failure.stage == "scale", first.failure
+
+
+@pytest.mark.parametrize("photo,units", [
+    ("104-440-155-hp-gauge_1", ["psi"]),            # bar and psi printed, one scale read: psi printed farther out
+    ("287-5530011__98538", ["bar"]),                # psi and bar printed, one scale read: bar printed farther out
+    ("12-GE3814-web", ["bar", "psi"]),              # 0..6 and 0..90: the slopes convert as bar and psi
+    ("13-AFC-600-25", ["psi", "bar"]),              # 0..600 and 0..40: psi outside, bar inside
+])
+def test_real_dual_unit_dials_are_read_in_each_scales_own_unit(shared_datasets, photo, units):
+    (path,) = sorted((shared_datasets / "needle-polygons" / "valid" / "images").glob(photo + "*"))
+    (read,) = [r for r in _full_reader().read_image(cv2.imread(str(path))) if r.value is not None]
+    assert [s.unit for s in read.scales] == units and read.unit == units[0]
