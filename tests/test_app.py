@@ -24,6 +24,7 @@ from gauged.commands.replay import batch_config
 from gauged.config import parse_config
 from gauged.reader.pipeline import GaugeRead
 from gauged.reader.reading import Value
+from gauged.reader.units import PrintedUnit
 from gauged.types import StageFailure
 
 BASE_NS = 1_700_000_000_000_000_000
@@ -37,7 +38,7 @@ class BrightnessReader:
     def read_box(self, image, box, score=1.0, known=None, primary_unit=None) -> GaugeRead:
         x0, y0, x1, y1 = (int(v) for v in box)
         level = float(image[y0:y1, x0:x1].mean())
-        read = GaugeRead(box=box, score=score, unit="bar", seconds={"needle": 0.001})
+        read = GaugeRead(box=box, score=score, units=(PrintedUnit("bar", 1.0),), seconds={"needle": 0.001})
         if level < 5:  # a black frame: the double's way to provoke a stage failure
             read.failure = StageFailure("needle", "no_needle", "black frame")
         else:
