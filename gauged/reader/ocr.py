@@ -52,7 +52,7 @@ from gauged.reader.numbers import filter_progression, merge_fragments, parse_num
 from gauged.reader.number_net import NumberNet
 from gauged.reader.ocr_engine import DEFAULT_MODEL_PACKAGE, OcrEngine, TextBox, crop_quad
 from gauged.reader.ocr_regions import RING, ink_box, polar_strip
-from gauged.reader.units import PrintedUnit, match_unit, printed_units
+from gauged.reader.units import PrintedUnit, match_unit, names_unit, printed_units
 from gauged.types import ScaleMarker, StageFailure
 
 STAGE = "ocr"
@@ -152,7 +152,7 @@ class ScaleTextReader:
             quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
             boxes = self._recognise(image_bgr, quads, circle)
         if circle is not None:
-            boxes = _ring_texts(boxes, circle) + [b for b in boxes if not _in_ring(b.center, circle) and match_unit(b.text)]
+            boxes = _ring_texts(boxes, circle) + [b for b in boxes if not _in_ring(b.center, circle) and names_unit(b.text)]
         boxes += list(known)
         if hints is not None and len(hints) and circle is not None and self.use_hints:
             boxes += self._read_hints(image_bgr, np.asarray(hints, float), boxes, circle)
@@ -268,7 +268,7 @@ class ScaleTextReader:
         # The face's detection also read main-scale numbers the hints' ink missed: they are kept, as
         # the full pass would keep them (an inner scale's numbers are left to the full pass).
         missed = [t for t in _ring_texts(others, circle) if parse_number(t.text) and _main_scale(t, circle)]
-        return _dedupe(numbers + missed) + [t for t in others if match_unit(t.text)], numbers
+        return _dedupe(numbers + missed) + [t for t in others if names_unit(t.text)], numbers
 
     def read_dial(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None = None,
                   known: Sequence[TextBox] = (), gap: float = math.pi / 2) -> list[TextBox]:

@@ -140,17 +140,40 @@ def printed_units(boxes: Sequence[TextBox], circle: tuple[float, float, float] |
                   ) -> tuple[PrintedUnit, ...]:
     """Every distinct unit the dial's texts name, each by its best text, best first: by score x OCR
     score, nearer the dial centre first on ties (units are printed on the face, inside the scale).
-    Empty when no text names a unit. Which one names which scale: :mod:`gauged.reader.scale_units`."""
+    Empty when no text names a unit. Which one names which scale: :mod:`gauged.reader.scale_units`.
+
+    A text of several words that names no unit whole is read word by word (words of two or more
+    characters, spelled right): a dual-scale dial prints "Knots km/h" on one line, a gauge "OIL PSI".
+    """
     best: dict[str, tuple[float, float, PrintedUnit]] = {}
     for b in boxes:
-        m = match_unit(b.text)
-        if not m:
-            continue
         radius = None if circle is None else math.dist(b.center, circle[:2]) / circle[2]
-        key = (m.score * b.score, -(radius or 0.0))
-        if m.unit not in best or key > best[m.unit][:2]:
-            best[m.unit] = (*key, PrintedUnit(m.unit, m.score * b.score, radius))
+        for m in _units_named(b.text):
+            key = (m.score * b.score, -(radius or 0.0))
+            if m.unit not in best or key > best[m.unit][:2]:
+                best[m.unit] = (*key, PrintedUnit(m.unit, m.score * b.score, radius))
     return tuple(entry[2] for entry in sorted(best.values(), key=lambda e: e[:2], reverse=True))
+
+
+def names_unit(text: str) -> bool:
+    """Whether ``text`` names a unit, whole or by one of its words (:func:`printed_units`)."""
+    return bool(_units_named(text))
+
+
+WORD_MIN_SCORE = 0.9  # a word of a longer text must spell its unit (look-alike digits allowed), not come near
+# one: the fuzzy match took a brand's "Barsa" for "bars" (synthetic held-out 000078, a degC dial read "bar")
+
+
+def _units_named(text: str) -> list[UnitMatch]:
+    """The units ``text`` names: itself whole, else each of its words of two or more characters that
+    spells one (:data:`WORD_MIN_SCORE`)."""
+    whole = match_unit(text)
+    if whole:
+        return [whole]
+    words = [w for w in text.split() if len(w) >= 2]
+    if len(words) < 2:
+        return []
+    return [m for w in words if (m := match_unit(w)) and m.score >= WORD_MIN_SCORE]
 
 
 # canonical unit -> (quantity, size of one unit in the quantity's base unit): scales of one quantity

@@ -55,3 +55,14 @@ def test_printed_units_come_best_read_first_with_their_distance_from_the_centre(
     units = printed_units(boxes, (100.0, 100.0, 50.0))
     assert [u.unit for u in units] == ["bar", "psi"]
     assert [u.radius for u in units] == [pytest.approx(27 / 50), pytest.approx(47 / 50)]
+
+
+def test_a_line_of_several_words_names_the_units_among_them():
+    q = np.float32([[0, 0], [10, 0], [10, 4], [0, 4]])
+    assert [u.unit for u in printed_units([TextBox("Knots km/h", 1.0, q)])] == ["knots", "km/h"]
+    assert [u.unit for u in printed_units([TextBox("OIL PSI", 0.9, q)])] == ["psi"]
+    # a unit spelled with a space stays whole; words that are no unit (or single letters) name none
+    assert [u.unit for u in printed_units([TextBox("in Hg", 0.9, q)])] == ["inHg"]
+    assert printed_units([TextBox("USE NO OIL", 0.9, q), TextBox("TYPE A", 0.9, q)]) == ()
+    # a brand's word one letter from a unit is no unit ("Barsa" is not "bars"), though a lone word would be
+    assert printed_units([TextBox("Barsa GmbH", 0.99, q)]) == ()
