@@ -103,7 +103,7 @@ def match_unit(text: str) -> UnitMatch | StageFailure:
     s = normalise(text)
     if not s:
         return _fail("empty", "no unit text")
-    s = re.sub(r"^(?:x?\d+x|x\d+)", "", s)  # "100xkpa", "x100" multipliers
+    s = re.sub(r"^(?:[x*]?\d+[x*]|[x*]\d+)", "", s)  # "100xkpa", "x100", "*100k pa" multipliers
     if s in DISTRACTORS or text.strip().lower() in DISTRACTORS:
         return _fail("distractor", f"{text!r} is a dial word, not a unit")
     for unit, spellings in UNIT_SPELLINGS.items():
@@ -155,9 +155,10 @@ def printed_units(boxes: Sequence[TextBox], circle: tuple[float, float, float] |
     return tuple(entry[2] for entry in sorted(best.values(), key=lambda e: e[:2], reverse=True))
 
 
-def names_unit(text: str) -> bool:
-    """Whether ``text`` names a unit, whole or by one of its words (:func:`printed_units`)."""
-    return bool(_units_named(text))
+def names_unit(text: str, min_score: float = 0.0) -> bool:
+    """Whether ``text`` names a unit, whole or by one of its words (:func:`printed_units`), with a
+    match score of at least ``min_score`` (:func:`match_unit`: 1.0 spelled, 0.6 a lone letter)."""
+    return any(m.score >= min_score for m in _units_named(text))
 
 
 WORD_MIN_SCORE = 0.9  # a word of a longer text must spell its unit (look-alike digits allowed), not come near

@@ -16,7 +16,7 @@ from gauged.reader.ellipse import ScaleArc
 from gauged.reader.numbers import merge_fragments, parse_number
 from gauged.reader.ocr_engine import (OcrEngine, OcrUnavailable, ctc_greedy, ctc_log_likelihood, db_boxes, find_model_files,
                                       order_quad)
-from gauged.reader.units import printed_units
+from gauged.reader.units import names_unit, printed_units
 from gauged.types import Ellipse, StageFailure
 
 INSTALL = "pip install --no-deps rapidocr==3.10.0 (or rapidocr-onnxruntime==1.4.4)"
@@ -35,7 +35,7 @@ def reader():
 
 
 def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), scale=0.9, unit="bar",
-                radius=0.78, img=None, start_deg=135.0, unit_radius=0.45):
+                radius=0.78, img=None, start_deg=135.0, unit_radius=0.45, unit_scale=0.8):
     """A rectified dial: ticks on CIRCLE, numbers at ``radius`` r (0.78) over 270 degrees clockwise
     from ``start_deg`` (lower left: the gap at the bottom), upright or radial (tops outward), drawn on
     a new face or on ``img``. Returns image and number centres."""
@@ -61,9 +61,10 @@ def render_dial(values, radial=False, ink=(25, 25, 25), face=(228, 230, 225), sc
         region[:] = (region * (1 - alpha) + np.array(ink) * alpha).astype(np.uint8)
         centres.append(c)
     if unit:
-        (w, h), _ = cv2.getTextSize(unit, cv2.FONT_HERSHEY_SIMPLEX, 0.8, 2)
-        cv2.putText(img, unit, (int(cx - w / 2), int(cy + unit_radius * r + h / 2)), cv2.FONT_HERSHEY_SIMPLEX, 0.8, ink,
-                    2, cv2.LINE_AA)
+        thick = 2 if unit_scale >= 0.5 else 1
+        (w, h), _ = cv2.getTextSize(unit, cv2.FONT_HERSHEY_SIMPLEX, unit_scale, thick)
+        cv2.putText(img, unit, (int(cx - w / 2), int(cy + unit_radius * r + h / 2)), cv2.FONT_HERSHEY_SIMPLEX, unit_scale,
+                    ink, thick, cv2.LINE_AA)
     return img, np.array(centres)
 
 
@@ -104,6 +105,14 @@ def test_a_unit_printed_near_the_centre_is_read(reader):
     img, _ = render_dial([0, 10, 20, 30, 40, 50], unit="kPa", unit_radius=0.22)
     units = printed_units(reader.read(img, CIRCLE), CIRCLE)
     assert [u.unit for u in units] == ["kPa"] and units[0].radius == pytest.approx(0.22, abs=0.05)
+
+
+@pytest.mark.parametrize("unit_scale", [0.22, 0.25, 0.28])
+def test_small_unit_print_is_read_closer_and_only_units_come_back(reader, unit_scale):
+    # 4-5 px letters: the look at the face's centre square at 2.4x the ring square's scale finds them
+    img, _ = render_dial([0, 10, 20, 30, 40, 50], unit="kPa", unit_radius=0.3, unit_scale=unit_scale)
+    texts = reader.read_units_closer(img, CIRCLE)
+    assert [u.unit for u in printed_units(texts, CIRCLE)] == ["kPa"] and all(names_unit(t.text) for t in texts)
 
 
 def test_read_decimals_and_negative_numbers(reader):

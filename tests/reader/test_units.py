@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gauged.reader.ocr_engine import TextBox
-from gauged.reader.units import match_unit, printed_units
+from gauged.reader.units import match_unit, names_unit, printed_units
 
 
 @pytest.mark.parametrize("text,unit", [
@@ -66,3 +66,13 @@ def test_a_line_of_several_words_names_the_units_among_them():
     assert printed_units([TextBox("USE NO OIL", 0.9, q), TextBox("TYPE A", 0.9, q)]) == ()
     # a brand's word one letter from a unit is no unit ("Barsa" is not "bars"), though a lone word would be
     assert printed_units([TextBox("Barsa GmbH", 0.99, q)]) == ()
+
+
+def test_names_unit_can_ask_for_a_spelled_unit():
+    assert names_unit("C") and not names_unit("C", 0.9)  # a lone letter scores 0.6
+    assert names_unit("kPa", 0.9) and names_unit("OIL PSI", 0.9) and not names_unit("WIKA")
+
+
+def test_a_multiplier_written_with_a_star_keeps_its_unit():
+    # a real fuel-pressure gauge prints "x100 kPa", read "*100k Pa": kPa, not Pa
+    assert match_unit("*100k Pa").unit == "kPa" and match_unit("x100kPa").unit == "kPa"
