@@ -28,7 +28,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Read every labelled image (image, reading, min, max) and print the failure rate, mean and "
         "median relative error |pred - true| / (max - min) over attempted images and over all images (failures "
         "as 100%), failures by stage and reason, and the needle-at-rest subset separately. On synthetic sets "
-        "(gauged synth images) the images are broken down by the printed numbers' height in px as well.",
+        "(gauged synth images) the images are broken down by the printed numbers' height in px as well, and the "
+        "units of the readings of dials that print theirs are counted right, wrong or missing.",
         epilog="example: gauged eval readings --data ../shared/datasets/gauge-readings-dev")
     readings.add_argument("--data", type=Path, required=True, help="folder with labels.json or labels.jsonl")
     readings.add_argument("--json", action="store_true", help="print the full result as JSON")
