@@ -23,7 +23,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "read", help="read the gauges in photos",
         description="Detect and read every gauge in each IMAGE. One line per gauge: value, unit, scale and "
-        "confidence, or the stage that refused and why. An image with no gauge still gets one line.",
+        "confidence, or the stage that refused and why. An image with no gauge still gets one line. A dial "
+        "with two scales (bar and psi) is read on its main (outer) scale; the other scale's reading follows, "
+        "in its own unit ('other_scales' in the JSON).",
         epilog="examples:\n  gauged read photo.jpg\n  gauged read --json --debug-dir /tmp/why *.jpg\n"
         "  gauged read --scale 0 10 bar panel.png      (known scale: no OCR)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -63,6 +65,9 @@ def record(image: str, index: int, read: GaugeRead | None, failure: StageFailure
         "confidence": 0.0 if value is None else round(value.confidence, 3),
         "scale": None if scale is None else {"min": scale.min_value, "max": scale.max_value, "unit": scale.unit},
         "failure": None if failure is None else failure.to_dict(),
+        "other_scales": [] if read is None else [
+            {"value": v, "unit": s.unit, "scale": {"min": s.min_value, "max": s.max_value, "unit": s.unit}}
+            for v, s in read.other_readings],
     }
 
 
@@ -73,8 +78,10 @@ def _line(rec: dict[str, Any]) -> str:
         return f"{head}: refused at {f['stage']} ({f['reason']}): {f['detail']}"
     scale = rec["scale"]
     unit = rec["unit"] or ""
+    others = "".join(f"; also {o['value']:.4g} {o['unit'] or ''} (scale {o['scale']['min']:g}..{o['scale']['max']:g})"
+                     for o in rec["other_scales"])
     return (f"{head}: {rec['value']:.4g} {unit}  (scale {scale['min']:g}..{scale['max']:g} {scale['unit'] or ''}, "
-            f"confidence {rec['confidence']:.2f})")
+            f"confidence {rec['confidence']:.2f}){others}")
 
 
 def run(args: argparse.Namespace) -> int:

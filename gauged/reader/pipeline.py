@@ -24,7 +24,7 @@ from gauged.reader.keypoints import CropKeypoints, Peaks, decode_crop_maps
 from gauged.reader.needle import NeedleReading, fit_needle
 from gauged.reader.ocr import NO_NUMBERS
 from gauged.reader.onnx_model import OnnxModel, to_model_input
-from gauged.reader.reading import Value, read_value
+from gauged.reader.reading import Value, read_value, value_on
 from gauged.reader.scale import fit_scales, scale_from_prior
 from gauged.reader.units import PrintedUnit
 from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
@@ -115,6 +115,14 @@ class GaugeRead:
     @property
     def scale(self) -> ScaleModel | None:
         return self.scales[0] if self.scales else None
+
+    @property
+    def other_readings(self) -> list[tuple[float, ScaleModel]]:
+        """The needle's value on each of the dial's other scales (a dual-scale dial's inner one, in its
+        own unit) with that scale, when the dial was read."""
+        if self.value is None or self.needle is None or self.arc is None:
+            return []
+        return [(value_on(self.needle, self.arc, scale), scale) for scale in self.scales[1:]]
 
     @property
     def unit(self) -> str | None:

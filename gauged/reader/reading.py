@@ -43,11 +43,18 @@ def read_value(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel, min_conf
         position = (scale.unwrap(angle) - start) / (end - start)
         if not -margin <= position <= 1 + margin:
             return StageFailure(STAGE, "needle_off_scale", f"needle at {position:+.0%} of the scale span")
-    value = float(scale.value_at(angle))
+    value = value_on(needle, arc, scale)
     confidence = _confidence(needle, arc, scale)
     if confidence < min_confidence:
         return StageFailure(STAGE, "low_confidence", f"confidence {confidence:.2f} < {min_confidence:g}")
     return Value(value, confidence, float(position))
+
+
+def value_on(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel) -> float:
+    """The needle's value on ``scale``, unchecked: the value :func:`read_value` gives, and the reading
+    of a dual-scale dial's other scale (its inner one, in its own unit)."""
+    angle = needle.angle if scale.full_circle else arc.linear(needle.angle)  # read against the neighbouring notches
+    return float(scale.value_at(angle))
 
 
 def _confidence(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel) -> float:

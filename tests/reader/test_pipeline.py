@@ -6,9 +6,11 @@ import cv2
 import numpy as np
 import pytest
 
+from gauged.commands.read import record
 from gauged.reader.factory import CROP_MODEL
 from gauged.reader.onnx_model import OnnxModel, packaged_model_path
 from gauged.reader.pipeline import GROW, GaugeReader
+from gauged.reader.units import UNIT_SIZE
 from gauged.synth.crop import render_crop
 from gauged.types import GaugeDetection, StageFailure
 
@@ -209,3 +211,10 @@ def test_real_dual_unit_dials_are_read_in_each_scales_own_unit(shared_datasets, 
     (path,) = sorted((shared_datasets / "needle-polygons" / "valid" / "images").glob(photo + "*"))
     (read,) = [r for r in _full_reader().read_image(cv2.imread(str(path))) if r.value is not None]
     assert [s.unit for s in read.scales] == units and read.unit == units[0]
+    # the other scale is read too, in its own unit: the same pressure, converted, within 2% of its span
+    for value, scale in read.other_readings:
+        converted = read.value.value * UNIT_SIZE[units[0]][1] / UNIT_SIZE[scale.unit][1]
+        assert abs(value - converted) <= 0.02 * (scale.max_value - scale.min_value), (value, converted)
+    assert len(read.other_readings) == len(units) - 1
+    rec = record(str(path), 0, read, None)
+    assert [(o["unit"], o["value"]) for o in rec["other_scales"]] == [(s.unit, v) for v, s in read.other_readings]
