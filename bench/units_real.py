@@ -48,14 +48,6 @@ MAIN_UNIT = {
 }
 
 
-def stem_of(path: Path) -> str:
-    """The photo's name without its augmentation suffix (``_jpg.rf.<hash>``)."""
-    for mark in ("_jpg.rf", "_png.rf", "_jpeg.rf"):
-        if mark in path.name:
-            return path.name.split(mark)[0]
-    return path.stem
-
-
 def main_unit(stem: str) -> str | None:
     return next((unit for start, unit in MAIN_UNIT.items() if stem.startswith(start)), None)
 
@@ -71,13 +63,14 @@ def main() -> int:
         return 2
     from gauged.config.model import ReaderConfig
     from gauged.reader.factory import build_reader
+    from gauged.training.real_data import photo_group
 
     header("units of real dual-unit / dual-scale readings against units read by eye")
     reader = build_reader(ReaderConfig())
     counts: Counter[str] = Counter()
     seen = set()
     for path in sorted(p for f in folders for p in f.iterdir()):
-        stem = stem_of(path)
+        stem = photo_group(path)  # augmented copies share it
         truth = main_unit(stem)
         if stem in seen or truth is None:
             continue

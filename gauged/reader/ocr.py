@@ -157,7 +157,8 @@ class ScaleTextReader:
             quads = [q.quad + np.float32([x0, y0]) for q in self.engine.detect(roi, max_side=self.det_side)]
             boxes = self._recognise(image_bgr, quads, circle)
         if circle is not None:
-            boxes = _ring_texts(boxes, circle) + [b for b in boxes if not _in_ring(b.center, circle) and names_unit(b.text)]
+            units = [b for b in boxes if not _in_ring(b.center, circle) and names_unit(b.text)]
+            boxes = _ring_texts(boxes, circle) + units
         boxes += list(known)
         if hints is not None and len(hints) and circle is not None and self.use_hints:
             boxes += self._read_hints(image_bgr, np.asarray(hints, float), boxes, circle)

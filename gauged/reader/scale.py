@@ -88,7 +88,7 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[Pr
         whole = _fit_ring(arc, markers, min_inliers)
         if not isinstance(whole, StageFailure) and _spans_both(whole, rings):
             # one scale whose numbers only looked like two rings (a skewed ellipse)
-            return label_scales([with_round_ends(arc, whole)], units)
+            return _finished(arc, [whole], units)
     lone = len(rings) == 1
     outer = _fit_ring(arc, rings[0], min_inliers)
     if isinstance(outer, StageFailure):
@@ -107,6 +107,12 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[Pr
             failure = _off_grid(arc, scales[0], hints)
         if failure is not None:
             return failure
+    return _finished(arc, scales, units)
+
+
+def _finished(arc: ScaleArc, scales: list[ScaleModel], units: Sequence[PrintedUnit]) -> list[ScaleModel]:
+    """The accepted scales (main one first) as returned: the main one with its round ends
+    (:func:`with_round_ends`), each in the unit printed for it (:func:`label_scales`)."""
     return label_scales([with_round_ends(arc, scales[0])] + scales[1:], units)
 
 
@@ -119,12 +125,13 @@ def with_round_ends(arc: ScaleArc, model: ScaleModel) -> ScaleModel:
     those values (a 0..1000 kPa dial: 13.3..998.7, reading 15.7 at rest for 0): printed numbers sit
     a degree or two off their notches, and the line extrapolates that to the ends. Each end counts
     as :data:`END_WEIGHT` numbers, a hedge between the numbers and the ends: on renders the numbers
-    sit on their notches and the end peaks carry their own error (docs/accuracy.md, session 22). Not for ends inferred from a notch gap (a guess, or the edge of what is visible) nor for a
-    full-circle scale, which has no ends.
+    sit on their notches and the end peaks carry their own error (docs/accuracy.md, session 22). Not
+    for ends inferred from a notch gap (a guess, or the edge of what is visible) nor for a full-circle
+    scale, which has no ends.
     """
-    if arc.ends_inferred or model.full_circle:
-        return model
     agreeing = [m for m in model.markers if m.inlier and m.angle is not None]
+    if arc.ends_inferred or model.full_circle or len(agreeing) < 2:
+        return model
     step = round_step(np.unique([m.value for m in agreeing]))
     if step <= 0:
         return model

@@ -57,6 +57,18 @@ DISTRACTORS = frozenset({
     "trerice", "winters", "noshok", "baumer", "budenberg", "wise", "general", "holley", "acurite", "no", "sn",
     "serial", "max", "min", "temp", "boost", "trans", "oxygen", "acetylene", "use", "no oil", "safety",
 })
+# canonical unit -> (quantity, size of one unit in the quantity's base unit): scales of one quantity
+# convert by the ratio of their sizes (temperature scales also by an offset, which slopes do not see)
+UNIT_SIZE: dict[str, tuple[str, float]] = {
+    "Pa": ("pressure", 1.0), "kPa": ("pressure", 1e3), "MPa": ("pressure", 1e6), "mbar": ("pressure", 100.0),
+    "bar": ("pressure", 1e5), "psi": ("pressure", 6894.757), "kg/cm2": ("pressure", 98066.5),
+    "inHg": ("pressure", 3386.389), "mmHg": ("pressure", 133.3224), "inH2O": ("pressure", 249.0889),
+    "mmH2O": ("pressure", 9.80665),
+    "degC": ("temperature", 1.0), "degF": ("temperature", 5.0 / 9.0),
+    "km/h": ("speed", 1.0), "knots": ("speed", 1.852),
+}
+WORD_MIN_SCORE = 0.9  # a word of a longer text must spell its unit (look-alike digits allowed), not come near
+# one: the fuzzy match took a brand's "Barsa" for "bars" (synthetic held-out 000078, a degC dial read "bar")
 _SUFFIX = re.compile(r"\((?:g|a|gauge|abs)\)$")
 _LOOKALIKE = str.maketrans({"0": "o", "1": "l", "5": "s", "|": "l"})
 
@@ -161,10 +173,6 @@ def names_unit(text: str, min_score: float = 0.0) -> bool:
     return any(m.score >= min_score for m in _units_named(text))
 
 
-WORD_MIN_SCORE = 0.9  # a word of a longer text must spell its unit (look-alike digits allowed), not come near
-# one: the fuzzy match took a brand's "Barsa" for "bars" (synthetic held-out 000078, a degC dial read "bar")
-
-
 def _units_named(text: str) -> list[UnitMatch]:
     """The units ``text`` names: itself whole, else each of its words of two or more characters that
     spells one (:data:`WORD_MIN_SCORE`)."""
@@ -175,15 +183,3 @@ def _units_named(text: str) -> list[UnitMatch]:
     if len(words) < 2:
         return []
     return [m for w in words if (m := match_unit(w)) and m.score >= WORD_MIN_SCORE]
-
-
-# canonical unit -> (quantity, size of one unit in the quantity's base unit): scales of one quantity
-# convert by the ratio of their sizes (temperature scales also by an offset, which slopes do not see)
-UNIT_SIZE: dict[str, tuple[str, float]] = {
-    "Pa": ("pressure", 1.0), "kPa": ("pressure", 1e3), "MPa": ("pressure", 1e6), "mbar": ("pressure", 100.0),
-    "bar": ("pressure", 1e5), "psi": ("pressure", 6894.757), "kg/cm2": ("pressure", 98066.5),
-    "inHg": ("pressure", 3386.389), "mmHg": ("pressure", 133.3224), "inH2O": ("pressure", 249.0889),
-    "mmH2O": ("pressure", 9.80665),
-    "degC": ("temperature", 1.0), "degF": ("temperature", 5.0 / 9.0),
-    "km/h": ("speed", 1.0), "knots": ("speed", 1.852),
-}
