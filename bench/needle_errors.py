@@ -29,7 +29,8 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gauged.evaluation.model_metrics import mask_iou, needle_mask_at  # noqa: E402
-from gauged.reader.onnx_model import OnnxModel, to_model_input  # noqa: E402
+from gauged.evaluation.models import whole_photo_needle_logits  # noqa: E402
+from gauged.reader.onnx_model import OnnxModel  # noqa: E402
 from gauged.training.real_data import load_needle_split  # noqa: E402
 
 WIDTH_BINS = ((0.0, 3.0), (3.0, 4.5), (4.5, 6.0), (6.0, np.inf))  # labelled needle width, photo px
@@ -68,8 +69,7 @@ def main() -> int:
         totals = dict.fromkeys(("right", "extra at edge", "extra far", "missed at edge", "missed far"), 0)
         for sample in load_needle_split(args.data, split):
             image, labelled = sample.load()
-            small = cv2.resize(image, (crop.input_size, crop.input_size), interpolation=cv2.INTER_AREA)
-            predicted = needle_mask_at(np.asarray(crop(to_model_input(small))[-1], np.float32), labelled.shape)
+            predicted = needle_mask_at(whole_photo_needle_logits(crop, image), labelled.shape)
             ious.append(mask_iou(predicted, labelled))
             widths.append(needle_width(labelled))
             for kind, count in error_kinds(predicted, labelled).items():

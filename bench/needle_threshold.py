@@ -22,7 +22,8 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gauged.evaluation.model_metrics import mask_iou  # noqa: E402
-from gauged.reader.onnx_model import OnnxModel, to_model_input  # noqa: E402
+from gauged.evaluation.models import whole_photo_needle_logits  # noqa: E402
+from gauged.reader.onnx_model import OnnxModel  # noqa: E402
 from gauged.training.real_data import load_needle_split  # noqa: E402
 
 
@@ -41,8 +42,7 @@ def main() -> int:
             ious: dict[float, list[float]] = {cut: [] for cut in args.cuts}
             for sample in load_needle_split(args.data, split):
                 image, mask = sample.load()
-                small = cv2.resize(image, (crop.input_size, crop.input_size), interpolation=cv2.INTER_AREA)
-                logits = np.asarray(crop(to_model_input(small))[-1], np.float32)
+                logits = np.asarray(whole_photo_needle_logits(crop, image), np.float32)
                 up = cv2.resize(logits, (mask.shape[1], mask.shape[0]), interpolation=cv2.INTER_LINEAR)
                 for cut in args.cuts:
                     ious[cut].append(mask_iou(up > cut, mask > 0))

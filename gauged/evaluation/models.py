@@ -73,6 +73,12 @@ def needle_metrics(crop: OnnxModel, root: Path, detector: GaugeDetector | None =
     return result
 
 
+def whole_photo_needle_logits(crop: OnnxModel, image: np.ndarray) -> np.ndarray:
+    """The needle logits (h, w) of a photo given whole to the crop model, resized to its input."""
+    size = crop.input_size
+    return crop(to_model_input(cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)))[-1]
+
+
 def _needle_scores(crop: OnnxModel, samples, crop_of) -> dict:
     """IoU and direction over ``samples``; ``crop_of(image)`` gives the reader's crop of a photo, or
     None to give the crop model the whole photo."""
@@ -83,8 +89,7 @@ def _needle_scores(crop: OnnxModel, samples, crop_of) -> dict:
         gauge = crop_of(image)
         if gauge is None:
             whole += 1
-            logits = crop(to_model_input(cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)))
-            pred = needle_mask_at(logits[-1], mask.shape)
+            pred = needle_mask_at(whole_photo_needle_logits(crop, image), mask.shape)
         else:
             pred = crop_logits_in_frame(crop(to_model_input(gauge.image))[-1], gauge, size, mask.shape) > 0
         truth = mask > 0
