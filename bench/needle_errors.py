@@ -42,10 +42,11 @@ def needle_width(mask: np.ndarray) -> float:
     return 2.0 * float(np.median(inside[mask > 0])) if mask.any() else 0.0
 
 
-def error_kinds(predicted: np.ndarray, labelled: np.ndarray) -> dict[str, int]:
-    """Right, and wrong pixels at the edge or far from it (see the module docstring)."""
+def error_kinds(predicted: np.ndarray, labelled: np.ndarray, width: float) -> dict[str, int]:
+    """Right, and wrong pixels at the edge or far from it (see the module docstring); ``width`` is
+    the labelled needle's (:func:`needle_width`)."""
     predicted, labelled = predicted.astype(np.uint8), labelled.astype(np.uint8)
-    edge = max(needle_width(labelled) / 2.0, 1.0)
+    edge = max(width / 2.0, 1.0)
     to_label = cv2.distanceTransform(1 - labelled, cv2.DIST_L2, 3)
     to_prediction = cv2.distanceTransform(1 - predicted, cv2.DIST_L2, 3)
     extra = (predicted == 1) & (labelled == 0)
@@ -72,7 +73,7 @@ def main() -> int:
             predicted = needle_mask_at(whole_photo_needle_logits(crop, image), labelled.shape)
             ious.append(mask_iou(predicted, labelled))
             widths.append(needle_width(labelled))
-            for kind, count in error_kinds(predicted, labelled).items():
+            for kind, count in error_kinds(predicted, labelled, widths[-1]).items():
                 totals[kind] += count
         ious_a, widths_a = np.array(ious), np.array(widths)
         right = totals["right"]
