@@ -48,6 +48,7 @@ Scale::
      "ellipse": Ellipse,               # image of the circle through the major notch centres
      "start": [x, y], "end": [x, y],   # notch points of min and max
      "majors": [{"value": v, "point": [x, y], "labelled": bool, "visible": bool}, ...],   # every major notch
+     "minors": [{"point": [x, y], "visible": bool}, ...],   # every minor notch (none when the style has none)
      "start_visible": bool, "end_visible": bool,
      "numbers": [Text, ...],           # every printed number, with "value"
      "unit_label": Text | null,
@@ -67,7 +68,7 @@ from typing import Any
 
 import numpy as np
 
-from gauged.synth.dial import PlacedText, outer_radius, scale_marks
+from gauged.synth.dial import PlacedText, outer_radius, scale_marks, tick_extent
 from gauged.synth.needle import NeedleGeometry
 from gauged.synth.params import GaugeParams
 from gauged.synth.projection import apply_homography, points_box, project_circle
@@ -146,14 +147,18 @@ def gauge_truth(params: GaugeParams, texts: tuple[PlacedText, ...], needle: Need
     angle = params.needle_angle
     scales = []
     for i, s in enumerate(params.scales):
-        _, majors, _ = scale_marks(s)
+        _, majors, minors = scale_marks(s)
         labels = set(np.round(np.asarray(scale_marks(s)[0]), 9).tolist())
         ang = np.array([s.angle_of(float(v)) for v in majors])
         pts = apply_homography(h, s.radius * np.column_stack([np.cos(ang), np.sin(ang)]))
+        minor_ang = np.array([s.angle_of(float(v)) for v in minors])
+        minor_r = sum(tick_extent(s, major=False)) / 2  # a minor notch's middle: shorter, it may sit off the radius
+        minor_pts = apply_homography(h, minor_r * np.column_stack([np.cos(minor_ang), np.sin(minor_ang)])).reshape(-1, 2)
         ends = apply_homography(h, s.radius * np.array([[math.cos(s.start_angle), math.sin(s.start_angle)],
                                                         [math.cos(s.end_angle), math.sin(s.end_angle)]]))
         unit_label = [t for t in texts if t.kind == "unit" and t.scale == i]
         seen = _visible(np.vstack([pts.reshape(-1, 2), ends]), front, front_scale, image_size)
+        minor_seen = _visible(minor_pts, front, front_scale, image_size) if len(minor_pts) else []
         scales.append({
             "role": s.role, "min": _value(s.min), "max": _value(s.max), "unit": s.unit, "unit_text": s.unit_text,
             "ellipse": _ellipse(project_circle(h, 0.0, 0.0, s.radius)),
@@ -161,6 +166,7 @@ def gauge_truth(params: GaugeParams, texts: tuple[PlacedText, ...], needle: Need
             "start_visible": bool(seen[-2]), "end_visible": bool(seen[-1]),
             "majors": [{"value": _value(v), "point": _pt(p), "labelled": round(float(v), 9) in labels,
                         "visible": bool(seen[k])} for k, (v, p) in enumerate(zip(majors, pts))],
+            "minors": [{"point": _pt(p), "visible": bool(minor_seen[k])} for k, p in enumerate(minor_pts)],
             "numbers": [_text_truth(t, h) for t in texts if t.kind == "number" and t.scale == i],
             "unit_label": _text_truth(unit_label[0], h) if unit_label else None,
             "reading": _value(s.value_at(angle)),

@@ -107,6 +107,27 @@ class CropNet(nn.Module):
         self.register_buffer("std", torch.tensor([0.502, 0.502, 0.502]).view(1, 3, 1, 1))
         self.needle_branch: NeedleBranch | None = None
         self.frozen: tuple[str, ...] = ()  # children whose weights and BatchNorm statistics stay fixed
+        self.aux_heatmaps: tuple[str, ...] = ()  # trained, never exported: see add_aux_heatmaps
+        self.exporting = False
+
+    def add_aux_heatmaps(self, names: tuple[str, ...]) -> None:
+        """Give the head more heatmap rows, between the six shipped ones and the needle row, for maps
+        learnt alongside and never shipped (``minor``: the minor notches, which the major map must
+        learn to tell apart). The new rows start at zero weights and a low bias, so every shipped map
+        is what it was; with ``exporting`` set the forward pass drops them again."""
+        last = self.head[-1]
+        grown = nn.Conv2d(last.in_channels, last.out_channels + len(names), 1)
+        with torch.no_grad():
+            grown.weight.zero_()
+            grown.bias.fill_(-4.0)
+            keep = last.out_channels - 1
+            grown.weight[:keep] = last.weight[:keep]
+            grown.bias[:keep] = last.bias[:keep]
+            grown.weight[-1:] = last.weight[-1:]
+            grown.bias[-1:] = last.bias[-1:]
+        self.head[-1] = grown
+        self.aux_heatmaps = tuple(names)
+        self._freeze(*self.frozen)  # the new rows train only where the head does
 
     def add_needle_branch(self) -> None:
         """Give the needle its own decoder, a copy of the shared one's up4/up2/head, and freeze the
@@ -122,6 +143,15 @@ class CropNet(nn.Module):
             raise ValueError("deepen_needle_branch needs a needle branch: call add_needle_branch first")
         self.needle_branch.up8 = copy.deepcopy(self.up8)
         self._freeze(*self.frozen)  # the new block trains unless the branch is frozen
+
+    def refine_needle_branch(self, width: int = 32) -> None:
+        """Give the needle branch a residual refiner at stride 2 that also sees the input's own pixels
+        (:class:`NeedleRefiner`). Its last convolution starts at zero, so the net computes exactly what
+        it did before; training can only move the mask's outline from there."""
+        if self.needle_branch is None:
+            raise ValueError("refine_needle_branch needs a needle branch: call add_needle_branch first")
+        self.needle_branch.refiner = NeedleRefiner(self.needle_branch.head[0][1].out_channels, width)
+        self._freeze(*self.frozen)
 
     def unfreeze(self) -> None:
         """Train every weight again (the trunk too): a net fine-tuned so is a needle model of its own,
@@ -151,12 +181,16 @@ class CropNet(nn.Module):
         return self
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        f = self.encoder((x - self.mean) / self.std)
+        x = (x - self.mean) / self.std
+        f = self.encoder(x)
         y8 = self.up8(f[16], f[8])
         out = self.head(self.up2(self.up4(y8, f[4]), f[2]))
-        if self.needle_branch is None:
-            return out
-        return torch.cat([out[:, :-1], self.needle_branch(y8, f)], dim=1)
+        if self.needle_branch is not None:
+            out = torch.cat([out[:, :-1], self.needle_branch(y8, f, x)], dim=1)
+        if self.exporting and self.aux_heatmaps:
+            shipped = len(CROP_HEATMAPS)
+            return torch.cat([out[:, :shipped], out[:, -1:]], dim=1)
+        return out
 
 
 class NeedleBranch(nn.Module):
@@ -174,11 +208,36 @@ class NeedleBranch(nn.Module):
             out.bias.copy_(last.bias[-1:])
         self.head = nn.Sequential(copy.deepcopy(head[0]), out)
         self.up8: _UpBlock | None = None
+        self.refiner: NeedleRefiner | None = None
 
-    def forward(self, y8: torch.Tensor, f: dict[int, torch.Tensor]) -> torch.Tensor:
+    def forward(self, y8: torch.Tensor, f: dict[int, torch.Tensor], image: torch.Tensor) -> torch.Tensor:
         if self.up8 is not None:
             y8 = self.up8(f[16], f[8])
-        return self.head(self.up2(self.up4(y8, f[4]), f[2]))
+        features = self.head[0](self.up2(self.up4(y8, f[4]), f[2]))
+        logit = self.head[1](features)
+        if self.refiner is None:
+            return logit
+        return logit + self.refiner(features, f[2], image, logit)
+
+
+class NeedleRefiner(nn.Module):
+    """A residual correction of the needle logit at stride 2, from the branch's last features, the
+    encoder's stride-2 features, the normalised input pixels themselves (folded 2x2 into a learnt
+    space-to-depth) and the logit. Most wrong needle pixels lie on the mask's outline, where a needle
+    3-5 px wide loses a third of its IoU to a pixel each side (bench/needle_errors.py); the decoder
+    sees the image only through the encoder's features, the refiner sees its pixels."""
+
+    def __init__(self, branch_channels: int, width: int = 32):
+        super().__init__()
+        self.pixels = nn.Conv2d(3, 12, 2, stride=2)
+        self.body = nn.Sequential(_sep_conv(branch_channels + _TAP_CHANNELS[2] + 12 + 1, width),
+                                  _sep_conv(width, width), _sep_conv(width, width))
+        self.out = nn.Conv2d(width, 1, 1)
+        nn.init.zeros_(self.out.weight)
+        nn.init.zeros_(self.out.bias)
+
+    def forward(self, features: torch.Tensor, f2: torch.Tensor, image: torch.Tensor, logit: torch.Tensor) -> torch.Tensor:
+        return self.out(self.body(torch.cat([features, f2, self.pixels(image), logit], dim=1)))
 
 
 class DetNet(nn.Module):

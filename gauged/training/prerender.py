@@ -51,7 +51,9 @@ def _render_one(args: tuple[int, int]) -> CropSample:
 
 def synth_points(truth: dict) -> dict[str, list[list[float]] | None]:
     """Crop-model keypoint labels from a :mod:`gauged.synth.truth` gauge record: start and end of the
-    primary scale, the major notches and number centres of every scale, needle tip and pivot.
+    primary scale, the major notches and number centres of every scale, needle tip and pivot, and the
+    minor notches (``minor``: not a shipped output; ``train_crop --minor-channel`` learns them as an
+    auxiliary map so the major map learns what a major notch is not).
 
     Only notches the image shows are labelled: one behind an occluder, another gauge or the frame
     edge is left out (a hidden start or end leaves its channel labelled empty), so the model is
@@ -60,6 +62,7 @@ def synth_points(truth: dict) -> dict[str, list[list[float]] | None]:
     scales = truth.get("scales") or []
     primary = next((s for s in scales if s.get("role") == "primary"), scales[0] if scales else None)
     majors = [m["point"] for s in scales for m in s.get("majors", []) if m.get("visible", True)]
+    minors = [m["point"] for s in scales for m in s.get("minors", []) if m.get("visible", True)]
     numbers = [[(n["box"][0] + n["box"][2]) / 2, (n["box"][1] + n["box"][3]) / 2]
                for s in scales for n in s.get("numbers", []) if n.get("kind") == "number"]
     needle = truth.get("needle") or {}
@@ -73,6 +76,7 @@ def synth_points(truth: dict) -> dict[str, list[list[float]] | None]:
         "start": end("start"),
         "end": end("end"),
         "major": majors if scales else None,
+        "minor": minors if scales and all("minors" in s for s in scales) else None,
         "tip": [needle["tip"]] if needle.get("tip") else None,
         "pivot": [needle["pivot"]] if needle.get("pivot") else None,
         "numbers": numbers or None,

@@ -36,6 +36,18 @@ log = logging.getLogger(__name__)
 
 HEATMAPS = CROP_CHANNELS[:-1]
 NOTCH_CHANNELS = ("start", "end", "major")
+AUX_MINOR = ("minor",)  # --minor-channel: the minor notches, learnt beside the shipped maps, not exported
+
+
+def train_channels(aux: tuple[str, ...] = ()) -> tuple[str, ...]:
+    """The maps a net with the auxiliary heatmaps ``aux`` is trained on: the shipped heatmaps, then
+    ``aux``, then the needle mask last (as :meth:`CropNet.add_aux_heatmaps` orders its head)."""
+    return HEATMAPS + tuple(aux) + CROP_CHANNELS[-1:]
+
+
+def shipped_maps(logits: np.ndarray) -> np.ndarray:
+    """(C, H, W) logits of a net trained with auxiliary heatmaps -> the shipped (7, H, W) maps."""
+    return logits if len(logits) == len(CROP_CHANNELS) else np.concatenate([logits[:len(HEATMAPS)], logits[-1:]])
 
 
 def widened_needle(sample: CropSample, pixels: int) -> CropSample:
@@ -55,7 +67,8 @@ def widened_needle(sample: CropSample, pixels: int) -> CropSample:
 
 
 def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength: float, colour_swap: float = 0.0,
-              sigma_by_channel: dict[str, float] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              sigma_by_channel: dict[str, float] | None = None, channels: tuple[str, ...] = CROP_CHANNELS
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One training example: (3, S, S) float32 input, (C, S/2, S/2) targets, (C,) validity. With
     probability ``colour_swap`` the image's colour channels are shuffled first (a black needle stays
     black, a red one may turn blue): the engine paints few needle colours, real dials more."""
@@ -69,14 +82,15 @@ def augmented(sample: CropSample, size: int, rng: np.random.Generator, strength:
         image = np.ascontiguousarray(image[:, :, rng.permutation(3)])
     needle = None if sample.needle is None else warp_image(sample.needle, matrix, size, nearest=True)
     points = {name: (None if sample.points.get(name) is None else warp_points(np.asarray(sample.points[name]), matrix))
-              for name in HEATMAPS}
-    target, valid = crop_targets(points, needle, size, CROP_CHANNELS, sigma_by_channel=sigma_by_channel)
+              for name in channels[:-1]}
+    target, valid = crop_targets(points, needle, size, channels, sigma_by_channel=sigma_by_channel)
     x = image[:, :, ::-1].astype(np.float32).transpose(2, 0, 1) / 255.0
     return np.ascontiguousarray(x), target, valid
 
 
 def make_batches(shards, size: int, batch: int, seed: int, weights: list[float], needle_dilate_px: int = 0,
-                 colour_swap: float = 0.0, sigma_by_channel: dict[str, float] | None = None):
+                 colour_swap: float = 0.0, sigma_by_channel: dict[str, float] | None = None,
+                 channels: tuple[str, ...] = CROP_CHANNELS):
     def batches(epoch: int):
         rng = np.random.default_rng(seed * 1000 + epoch)
         entries = []
@@ -85,7 +99,7 @@ def make_batches(shards, size: int, batch: int, seed: int, weights: list[float],
             entries += [(index, int(i)) for i in picks]
         order = rng.permutation(len(entries))
         for start in range(0, len(order) - batch + 1, batch):
-            xs, ts, vs = zip(*(augmented(widened_needle(shards[s].sample(i), needle_dilate_px), size, rng, 1.0, colour_swap, sigma_by_channel) for s, i in (entries[k] for k in order[start:start + batch])))
+            xs, ts, vs = zip(*(augmented(widened_needle(shards[s].sample(i), needle_dilate_px), size, rng, 1.0, colour_swap, sigma_by_channel, channels) for s, i in (entries[k] for k in order[start:start + batch])))
             x = torch.from_numpy(np.stack(xs)).contiguous(memory_format=torch.channels_last)
             yield x, torch.from_numpy(np.stack(ts)), torch.from_numpy(np.stack(vs))
     return batches
@@ -100,6 +114,23 @@ def has_needle_branch(init: Path) -> bool:
 def has_deep_needle_branch(init: Path) -> bool:
     """Whether the ``--init`` file's needle branch has its own stride-16 -> 8 block (``--needle-branch-up8``)."""
     return _branch_kind(init) == "up8"
+
+
+def has_needle_refiner(init: Path) -> bool:
+    """Whether the ``--init`` file's needle branch has a refiner (``--needle-refiner``)."""
+    if init.suffix == ".onnx":
+        import onnx
+
+        meta = {p.key: p.value for p in onnx.load(str(init), load_external_data=False).metadata_props}
+        return bool(json.loads(meta.get("gauged", "{}")).get("needle_refiner"))
+    state = torch.load(init, map_location="cpu", weights_only=False)["model"]
+    return any(key.startswith("needle_branch.refiner.") for key in state)
+
+
+def _checkpoint_rows(init: Path) -> int:
+    """Output rows of a checkpoint's head (7, or more with auxiliary heatmaps)."""
+    state = torch.load(init, map_location="cpu", weights_only=False)["model"]
+    return int(state["head.1.weight"].shape[0])
 
 
 def _branch_kind(init: Path) -> str | None:
@@ -133,7 +164,7 @@ def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> di
             for index in range(min(limit, len(synth_val))):
                 sample = synth_val.sample(index)
                 logits = model(torch.from_numpy(augmented(sample, size, None, 0.0)[0][None]))[0].numpy()
-                keypoints = decode_crop_maps(logits, size, require_notches=False)
+                keypoints = decode_crop_maps(shipped_maps(logits), size, require_notches=False)
                 match = match_points(keypoints.major.points, np.asarray(sample.points.get("major") or []).reshape(-1, 2), tol)
                 recall_num += match.matched
                 recall_den += match.labelled
@@ -189,6 +220,7 @@ def export_onnx(model: CropNet, size: int, path: Path, metadata: dict) -> None:
     import onnx
 
     model.eval()
+    model.exporting = True  # auxiliary heatmaps are not shipped
     torch.onnx.export(model, torch.zeros(1, 3, size, size), str(path), opset_version=17, input_names=["image"],
                       output_names=["maps"], dynamo=False)
     proto = onnx.load(str(path))
@@ -224,6 +256,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--needle-branch-up8", action="store_true",
                         help="with --needle-branch: the branch gets its own stride-16 -> 8 block as well "
                              "(a copy of the shared one), so it decodes from the encoder's deepest features")
+    parser.add_argument("--needle-refiner", action="store_true",
+                        help="with --needle-branch: add a residual refiner at stride 2 that sees the input's pixels "
+                             "(nets.NeedleRefiner); it starts at zero, so training starts from the --init net exactly")
     parser.add_argument("--needle-loss-upsample", type=int, default=1, metavar="N",
                         help="judge the needle mask N times finer than the output grid, as a binary mask "
                              "(losses.upsampled_mask_loss); 1: on the coverage grid")
@@ -236,6 +271,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="after --init: train only the keypoint maps' stride-4 and stride-2 decoder and head; "
                              "the encoder, the stride-8 block and a needle branch stay exactly as they were, so "
                              "the needle mask of a net with a branch does not change")
+    parser.add_argument("--minor-channel", action="store_true",
+                        help="also learn the minor notches as an auxiliary map (not exported), so the major map "
+                             "learns what a major notch is not; needs shards rendered with minor notches")
     parser.add_argument("--export", type=Path, help="write the best model as ONNX here when done")
     args = parser.parse_args(argv)
     if args.keypoint_decoder and not args.init:
@@ -244,6 +282,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--needle-branch trains a branch off a trained net: give that net with --init")
     if args.needle_branch_up8 and not args.needle_branch:
         parser.error("--needle-branch-up8 deepens the needle branch: give --needle-branch too")
+    if args.needle_refiner and not args.needle_branch:
+        parser.error("--needle-refiner refines the needle branch: give --needle-branch too")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     torch.set_num_threads(args.threads)
     torch.manual_seed(args.seed)
@@ -262,6 +302,10 @@ def main(argv: list[str] | None = None) -> int:
         model.add_needle_branch()  # before loading, so the export's convolutions match the net's
         if has_deep_needle_branch(args.init):
             model.deepen_needle_branch()
+        if has_needle_refiner(args.init):
+            model.refine_needle_branch()
+    if args.init and args.init.suffix != ".onnx" and _checkpoint_rows(args.init) > len(CROP_CHANNELS):
+        model.add_aux_heatmaps(AUX_MINOR)  # before loading: the checkpoint's head has the auxiliary rows
     if args.init:
         from gauged.training.from_onnx import initialise
 
@@ -271,6 +315,10 @@ def main(argv: list[str] | None = None) -> int:
         model.add_needle_branch()
     if args.needle_branch_up8 and model.needle_branch.up8 is None:
         model.deepen_needle_branch()
+    if args.minor_channel and not model.aux_heatmaps:
+        model.add_aux_heatmaps(AUX_MINOR)
+    if args.needle_refiner and model.needle_branch.refiner is None:
+        model.refine_needle_branch()
     if args.needle_branch and args.train_all:
         model.unfreeze()
     if args.keypoint_decoder:
@@ -287,7 +335,7 @@ def main(argv: list[str] | None = None) -> int:
     started = time.monotonic()
     sigmas = {name: args.notch_sigma_cells for name in NOTCH_CHANNELS} if args.notch_sigma_cells else None
     best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights, args.needle_dilate_px,
-                                    args.colour_swap, sigmas), steps,
+                                    args.colour_swap, sigmas, train_channels(model.aux_heatmaps)), steps,
                  functools.partial(_loss, needle_upsample=args.needle_loss_upsample),
                  lambda m: validate_crop(m, synth_val, real_val, args.size),
                  TrainSettings(epochs=args.epochs, lr=args.lr), args.run)
@@ -305,7 +353,10 @@ def main(argv: list[str] | None = None) -> int:
                                                     "keypoint_decoder": args.keypoint_decoder,
                                                     "needle_branch": model.needle_branch is not None,
                                                     "needle_branch_up8": model.needle_branch is not None
-                                                    and model.needle_branch.up8 is not None})
+                                                    and model.needle_branch.up8 is not None,
+                                                    "needle_refiner": model.needle_branch is not None
+                                                    and model.needle_branch.refiner is not None,
+                                                    "aux_heatmaps": list(model.aux_heatmaps)})
         log.info("exported %s", args.export)
     return 0
 

@@ -196,3 +196,36 @@ def test_training_labels_keep_only_the_notches_the_image_shows() -> None:
     assert synth_points(hidden_start)["start"] == []  # labelled: no start to be seen
     old = dict(truth, scales=[{k: v for k, v in primary.items() if not k.endswith("_visible")}])
     assert synth_points(old)["start"] == [primary["start"]]  # records from before visibility count as seen
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_truth_minor_notches_land_on_ink(seed: int) -> None:
+    sample = render_crop(seed, size=512, clean=True)
+    params = sample.params
+    near_needle = cv2.dilate((sample.needle_mask > 0).astype(np.uint8), np.ones((7, 7), np.uint8))
+    face = np.asarray(params.face.color, float)
+    checked, on_ink = 0, 0
+    for scale_truth, scale in zip(sample.truth["scales"], params.scales):
+        ink = np.asarray(scale.color, float)
+        if np.linalg.norm(ink - face) < 60 or scale.minor_style == "none":
+            assert scale.minor_style != "none" or scale_truth["minors"] == []
+            continue
+        for minor in scale_truth["minors"]:
+            x, y = minor["point"]
+            if not (2 <= x < 510 and 2 <= y < 510) or near_needle[int(y), int(x)]:
+                continue
+            checked += 1
+            on_ink += _inkness(_bilinear(sample.image, x, y), face, ink) > 0.3
+    if checked:
+        assert on_ink / checked >= 0.9, f"{on_ink}/{checked} minor notch points on ink"
+
+
+def test_training_labels_carry_the_seen_minor_notches() -> None:
+    from gauged.training.prerender import synth_points
+
+    truth = render_crop(7, 256, masks=False).truth
+    minors = [m["point"] for s in truth["scales"] for m in s["minors"] if m["visible"]]
+    assert len(minors) > 10
+    assert synth_points(truth)["minor"] == minors
+    old = dict(truth, scales=[{k: v for k, v in s.items() if k != "minors"} for s in truth["scales"]])
+    assert synth_points(old)["minor"] is None  # records from before minor notches: not labelled
