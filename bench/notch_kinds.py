@@ -1,0 +1,126 @@
+"""Which major notches the crop model misses, and what its unassigned peaks sit on.
+
+    python bench/notch_kinds.py --shard data/synth-val-256 [--model gauged/models/crop.onnx] [--group "full size"]
+
+``--shard`` is the held-out crop shard `gauged eval models` scores (`python -m
+gauged.training.prerender crops --seed 1000000 --count 500 --size 256 --out data/synth-val-256`).
+Each crop is rendered again from its seed, so every notch's kind is known: its scale's role, its
+drawing style, whether a number is printed at it, how far apart the scale's majors are, and where
+the minor notches are. Peaks are the reader's (`decode_crop_maps`, threshold 0.3); the tolerance is
+issue 4's 4 px at 448 px. Prints:
+
+- recall by kind of labelled major notch (a peak within the tolerance of it);
+- every peak sorted by what it lies on: a labelled major, a hidden major, a labelled major 1-2
+  tolerances off, a minor notch (within one tolerance, or two), a number, the needle, or none of those.
+
+About 15 s for the 353 full-size crops.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter, defaultdict
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import header  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from gauged.evaluation.models import render_scale  # noqa: E402
+from gauged.reader.keypoints import decode_crop_maps  # noqa: E402
+from gauged.reader.onnx_model import OnnxModel, to_model_input  # noqa: E402
+from gauged.synth.crop import render_crop  # noqa: E402
+from gauged.training.shards import open_crop_shard  # noqa: E402
+
+GROUPS = ("all", "full size", "upsampled")
+
+
+def nearest(points: np.ndarray, p: np.ndarray) -> float:
+    return float(np.min(np.linalg.norm(points - p, axis=1))) if len(points) else np.inf
+
+
+def spacing_kind(points: np.ndarray) -> str:
+    """The scale's major notches by their median spacing at 256 px."""
+    gap = float(np.median(np.linalg.norm(np.diff(points, axis=0), axis=1))) if len(points) > 1 else np.inf
+    return "majors < 8 px apart" if gap < 8 else "majors 8-14 px apart" if gap < 14 else "majors >= 14 px apart"
+
+
+def peak_kind(p: np.ndarray, labelled: np.ndarray, every_major: np.ndarray, minors: np.ndarray,
+              numbers: np.ndarray, needle: np.ndarray | None, tol: float) -> str:
+    if nearest(labelled, p) <= tol:
+        return "a labelled major (assigned)"
+    if nearest(every_major, p) <= tol:
+        return "a hidden major"
+    if nearest(labelled, p) <= 2 * tol:
+        return "a labelled major, 1-2 tolerances off"
+    if nearest(minors, p) <= tol:
+        return "a minor notch"
+    if nearest(minors, p) <= 2 * tol:
+        return "a minor notch, 1-2 tolerances off"
+    if nearest(numbers, p) <= 6:
+        return "a number"
+    x, y = (int(np.clip(v, 0, s - 1)) for v, s in zip(p, (needle.shape[1], needle.shape[0]))) if needle is not None else (0, 0)
+    if needle is not None and needle[y, x]:
+        return "the needle"
+    return "none of those"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--shard", type=Path, required=True, help="crop shard of the synthetic engine")
+    parser.add_argument("--model", type=Path, default=Path("gauged/models/crop.onnx"))
+    parser.add_argument("--group", choices=GROUPS, default="full size", help="crops captured at full size, upsampled, or all")
+    args = parser.parse_args()
+    if not (args.shard / "labels.jsonl").is_file():
+        parser.error(f"{args.shard} is not a crop shard (no labels.jsonl); make one with gauged.training.prerender crops")
+    header("which major notches are missed, and what the unassigned peaks lie on")
+    model = OnnxModel(args.model, threads=2)
+    shard = open_crop_shard(args.shard)
+    size = model.input_size
+    tol = 4.0 * size / 448
+    recall: dict[str, list[int]] = defaultdict(lambda: [0, 0])
+    peaks_on: Counter[str] = Counter()
+    crops = 0
+    for index in range(len(shard)):
+        sample = shard.sample(index)
+        if sample.image.shape[0] != size:
+            raise SystemExit(f"{args.shard} holds {sample.image.shape[0]} px crops; the model takes {size}")
+        captured = render_scale(sample.source, size)
+        group = "full size" if captured == 1.0 else "upsampled"
+        if args.group != "all" and group != args.group:
+            continue
+        crops += 1
+        crop = render_crop(int(sample.source.split("/")[1]), size, masks=False)
+        peaks = decode_crop_maps(model(to_model_input(sample.image)), size, require_notches=False).major.points.reshape(-1, 2)
+        labelled = np.asarray(sample.points.get("major") or [], float).reshape(-1, 2)
+        every_major, minors = [], []
+        for truth, scale in zip(crop.truth["scales"], crop.params.scales):
+            seen = np.asarray([m["point"] for m in truth["majors"] if m["visible"]], float).reshape(-1, 2)
+            every_major.append(np.asarray([m["point"] for m in truth["majors"]], float).reshape(-1, 2))
+            minors.append(np.asarray([m["point"] for m in truth.get("minors", [])], float).reshape(-1, 2))
+            for m in truth["majors"]:
+                if not m["visible"]:
+                    continue
+                hit = nearest(peaks, np.asarray(m["point"])) <= tol
+                for kind in (f"{scale.role} scale", f"drawn as {scale.major_style}",
+                             "numbered" if m["labelled"] else "not numbered", spacing_kind(seen)):
+                    recall[kind][0] += 1
+                    recall[kind][1] += int(hit)
+        numbers = np.asarray(sample.points.get("numbers") or [], float).reshape(-1, 2)
+        for p in peaks:
+            peaks_on[peak_kind(p, labelled, np.vstack(every_major), np.vstack(minors), numbers, sample.needle, tol)] += 1
+    print(f"# {crops} crops ({args.group}) at {size} px, tolerance {tol:.2f} px (4 px at 448)")
+    print("recall by kind of labelled major notch:")
+    for kind, (count, hit) in sorted(recall.items()):
+        print(f"  {kind:24s} {count:5d}  {hit / count:6.1%}")
+    total = sum(peaks_on.values())
+    print(f"what the {total} peaks lie on:")
+    for kind, count in peaks_on.most_common():
+        print(f"  {kind:38s} {count:5d}  {count / total:6.1%}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
