@@ -28,23 +28,28 @@ def _inkness(pixel: np.ndarray, face: np.ndarray, ink: np.ndarray) -> float:
     return float(np.dot(pixel - face, d) / max(np.dot(d, d), 1e-9))
 
 
-@pytest.mark.parametrize("seed", SEEDS)
-def test_truth_major_notches_land_on_ink(seed: int) -> None:
-    sample = render_crop(seed, size=512, clean=True)
-    params = sample.params
+def _notches_on_ink(sample, kind: str) -> tuple[int, int]:
+    """(notch points of ``kind`` ("majors" or "minors") checked, those on ink) of a clean 512 px
+    render; scales with too little contrast, points at the edge and points by the needle are skipped."""
     near_needle = cv2.dilate((sample.needle_mask > 0).astype(np.uint8), np.ones((7, 7), np.uint8))
-    face = np.asarray(params.face.color, float)
+    face = np.asarray(sample.params.face.color, float)
     checked, on_ink = 0, 0
-    for scale_truth, scale in zip(sample.truth["scales"], params.scales):
+    for scale_truth, scale in zip(sample.truth["scales"], sample.params.scales):
         ink = np.asarray(scale.color, float)
         if np.linalg.norm(ink - face) < 60:
             continue  # too little contrast to tell ink from face in colour alone
-        for major in scale_truth["majors"]:
-            x, y = major["point"]
+        for notch in scale_truth[kind]:
+            x, y = notch["point"]
             if not (2 <= x < 510 and 2 <= y < 510) or near_needle[int(y), int(x)]:
                 continue
             checked += 1
             on_ink += _inkness(_bilinear(sample.image, x, y), face, ink) > 0.3
+    return checked, on_ink
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_truth_major_notches_land_on_ink(seed: int) -> None:
+    checked, on_ink = _notches_on_ink(render_crop(seed, size=512, clean=True), "majors")
     assert checked >= 3
     assert on_ink / checked >= 0.95, f"{on_ink}/{checked} notch points on ink"
 
@@ -201,22 +206,11 @@ def test_training_labels_keep_only_the_notches_the_image_shows() -> None:
 @pytest.mark.parametrize("seed", SEEDS)
 def test_truth_minor_notches_land_on_ink(seed: int) -> None:
     sample = render_crop(seed, size=512, clean=True)
-    params = sample.params
-    near_needle = cv2.dilate((sample.needle_mask > 0).astype(np.uint8), np.ones((7, 7), np.uint8))
-    face = np.asarray(params.face.color, float)
-    checked, on_ink = 0, 0
-    for scale_truth, scale in zip(sample.truth["scales"], params.scales):
-        ink = np.asarray(scale.color, float)
-        if np.linalg.norm(ink - face) < 60 or scale.minor_style == "none":
-            assert scale.minor_style != "none" or scale_truth["minors"] == []
-            continue
-        for minor in scale_truth["minors"]:
-            x, y = minor["point"]
-            if not (2 <= x < 510 and 2 <= y < 510) or near_needle[int(y), int(x)]:
-                continue
-            checked += 1
-            on_ink += _inkness(_bilinear(sample.image, x, y), face, ink) > 0.3
-    if checked:
+    for scale_truth, scale in zip(sample.truth["scales"], sample.params.scales):
+        if scale.minor_style == "none":
+            assert scale_truth["minors"] == []
+    checked, on_ink = _notches_on_ink(sample, "minors")
+    if checked:  # 9 of the 12 seeds have minor notches in contrast
         assert on_ink / checked >= 0.9, f"{on_ink}/{checked} minor notch points on ink"
 
 
