@@ -64,9 +64,10 @@ def peak_kind(p: np.ndarray, labelled: np.ndarray, every_major: np.ndarray, mino
         return "a minor notch, 1-2 tolerances off"
     if nearest(numbers, p) <= 6:
         return "a number"
-    x, y = (int(np.clip(v, 0, s - 1)) for v, s in zip(p, (needle.shape[1], needle.shape[0]))) if needle is not None else (0, 0)
-    if needle is not None and needle[y, x]:
-        return "the needle"
+    if needle is not None:
+        x, y = (int(np.clip(v, 0, side - 1)) for v, side in zip(p, needle.shape[::-1]))
+        if needle[y, x]:
+            return "the needle"
     return "none of those"
 
 
@@ -112,14 +113,15 @@ def main() -> int:
                              "numbered" if m["labelled"] else "not numbered", spacing_kind(seen)):
                     recall[kind][0] += 1
                     recall[kind][1] += int(hit)
-        every_notch = np.vstack(every_major + minors)
+        every_major, minors = np.vstack(every_major), np.vstack(minors)
+        every_notch = np.vstack([every_major, minors])
         for m in (m for truth in crop.truth["scales"] for m in truth["majors"] if m["visible"]):
             gaps = np.linalg.norm(every_notch - np.asarray(m["point"]), axis=1)
             gaps = gaps[gaps > 1e-6]
             separation.append(float(gaps.min()) * captured if len(gaps) else np.inf)
         numbers = np.asarray(sample.points.get("numbers") or [], float).reshape(-1, 2)
         for p in peaks:
-            peaks_on[peak_kind(p, labelled, np.vstack(every_major), np.vstack(minors), numbers, sample.needle, tol)] += 1
+            peaks_on[peak_kind(p, labelled, every_major, minors, numbers, sample.needle, tol)] += 1
     print(f"# {crops} crops ({args.group}) at {size} px, tolerance {tol:.2f} px (4 px at 448)")
     print("recall by kind of labelled major notch:")
     for kind, (count, hit) in sorted(recall.items()):

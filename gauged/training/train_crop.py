@@ -16,6 +16,7 @@ import functools
 import json
 import logging
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -105,48 +106,45 @@ def make_batches(shards, size: int, batch: int, seed: int, weights: list[float],
     return batches
 
 
-def has_needle_branch(init: Path) -> bool:
-    """Whether the ``--init`` file is a crop model with a needle decoder of its own (an ONNX export
-    whose metadata says so, or a checkpoint holding ``needle_branch.`` weights)."""
-    return _branch_kind(init) is not None
+@dataclass(frozen=True)
+class InitParts:
+    """What an ``--init`` file's net holds beyond the plain crop net, read from it once: its needle
+    branch (None, "up4": from the shared stride-8 features, or "up8": with its own stride-16 -> 8
+    block), whether that branch has a refiner, and how many auxiliary heatmap rows its head has
+    (a checkpoint's; an ONNX export has dropped them)."""
+
+    branch: str | None = None
+    refiner: bool = False
+    aux_rows: int = 0
 
 
-def has_deep_needle_branch(init: Path) -> bool:
-    """Whether the ``--init`` file's needle branch has its own stride-16 -> 8 block (``--needle-branch-up8``)."""
-    return _branch_kind(init) == "up8"
-
-
-def has_needle_refiner(init: Path) -> bool:
-    """Whether the ``--init`` file's needle branch has a refiner (``--needle-refiner``)."""
-    if init.suffix == ".onnx":
-        import onnx
-
-        meta = {p.key: p.value for p in onnx.load(str(init), load_external_data=False).metadata_props}
-        return bool(json.loads(meta.get("gauged", "{}")).get("needle_refiner"))
-    state = torch.load(init, map_location="cpu", weights_only=False)["model"]
-    return any(key.startswith("needle_branch.refiner.") for key in state)
-
-
-def _checkpoint_rows(init: Path) -> int:
-    """Output rows of a checkpoint's head (7, or more with auxiliary heatmaps)."""
-    state = torch.load(init, map_location="cpu", weights_only=False)["model"]
-    return int(state["head.1.weight"].shape[0])
-
-
-def _branch_kind(init: Path) -> str | None:
-    """None (no branch), "up4" (the branch starts from the shared stride-8 features) or "up8"."""
+def init_parts(init: Path) -> InitParts:
+    """:class:`InitParts` of an ONNX export (from its ``gauged`` metadata) or a checkpoint (from its weights)."""
     if init.suffix == ".onnx":
         import onnx
 
         meta = {p.key: p.value for p in onnx.load(str(init), load_external_data=False).metadata_props}
         settings = json.loads(meta.get("gauged", "{}"))
         if not settings.get("needle_branch"):
-            return None
-        return "up8" if settings.get("needle_branch_up8") else "up4"
+            return InitParts()
+        return InitParts("up8" if settings.get("needle_branch_up8") else "up4", bool(settings.get("needle_refiner")))
     state = torch.load(init, map_location="cpu", weights_only=False)["model"]
+    aux_rows = int(state["head.1.weight"].shape[0]) - len(CROP_CHANNELS)
     if not any(key.startswith("needle_branch.") for key in state):
-        return None
-    return "up8" if any(key.startswith("needle_branch.up8.") for key in state) else "up4"
+        return InitParts(aux_rows=aux_rows)
+    return InitParts("up8" if any(key.startswith("needle_branch.up8.") for key in state) else "up4",
+                     any(key.startswith("needle_branch.refiner.") for key in state), aux_rows)
+
+
+def has_needle_branch(init: Path) -> bool:
+    """Whether the ``--init`` file is a crop model with a needle decoder of its own (an ONNX export
+    whose metadata says so, or a checkpoint holding ``needle_branch.`` weights)."""
+    return init_parts(init).branch is not None
+
+
+def has_deep_needle_branch(init: Path) -> bool:
+    """Whether the ``--init`` file's needle branch has its own stride-16 -> 8 block (``--needle-branch-up8``)."""
+    return init_parts(init).branch == "up8"
 
 
 def _loss(model, batch, needle_upsample: int = 1):
@@ -295,16 +293,17 @@ def main(argv: list[str] | None = None) -> int:
     # channels_last makes the depthwise convolutions' backward pass ~1.7x faster on CPU (measured).
     # Any --init sets every weight, so the ImageNet ones are not loaded first.
     model = CropNet(args.size, pretrained=not (args.scratch or args.init)).to(memory_format=torch.channels_last)
-    init_has_branch = bool(args.init) and has_needle_branch(args.init)
+    parts = init_parts(args.init) if args.init else InitParts()
+    init_has_branch = parts.branch is not None
     if init_has_branch and not (args.needle_branch or args.keypoint_decoder):
         parser.error(f"--init {args.init} has a needle branch: continue it with --needle-branch")
-    if init_has_branch:
-        model.add_needle_branch()  # before loading, so the export's convolutions match the net's
-        if has_deep_needle_branch(args.init):
+    if init_has_branch:  # built before loading, so the file's convolutions match the net's
+        model.add_needle_branch()
+        if parts.branch == "up8":
             model.deepen_needle_branch()
-        if has_needle_refiner(args.init):
+        if parts.refiner:
             model.refine_needle_branch()
-    if args.init and args.init.suffix != ".onnx" and _checkpoint_rows(args.init) > len(CROP_CHANNELS):
+    if parts.aux_rows:
         model.add_aux_heatmaps(AUX_MINOR)  # before loading: the checkpoint's head has the auxiliary rows
     if args.init:
         from gauged.training.from_onnx import initialise
