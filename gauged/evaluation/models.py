@@ -7,7 +7,8 @@
   centre, see :func:`gauged.evaluation.model_metrics.mask_direction`); once with each photo given
   whole, once cut to its detected gauge as the reader does (:mod:`gauged.evaluation.gauge_crops`).
 - Crop model on a synthetic crop shard: major-notch recall and unassigned share within 4 px at
-  448 px, start/end notch found.
+  448 px, start/end notch found; with the notch check (``notch_check.onnx``) where it ships, and
+  of the crop model's peaks alone.
 - Speed: median of 100 runs after 10 warm-up runs, at the configured thread count.
 """
 
@@ -22,9 +23,11 @@ from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame
 from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
 from gauged.evaluation.timing import median_s
 from gauged.reader.detect import GaugeDetector
-from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, NUMBER_NET_MODEL, OCR_DET_INT8_MODEL, model_path
+from gauged.reader.factory import (CROP_MODEL, DETECTOR_MODEL, NOTCH_CHECK_MODEL, NUMBER_NET_MODEL, OCR_DET_INT8_MODEL,
+                                   helper_model_path, model_path)
 from gauged.reader.keypoints import decode_crop_maps
-from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path, to_model_input
+from gauged.reader.notch_check import NotchCheck
+from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, to_model_input
 from gauged.types import StageFailure
 
 
@@ -133,10 +136,11 @@ class _NotchCounts:
                 "start_end_found": self.ends_found / max(1, self.ends)}
 
 
-def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000) -> dict:
+def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000, notch_check: NotchCheck | None = None) -> dict:
     """Notch recall, unassigned share and ends found on a shard's crops; ``by_capture`` splits the
     engine's crops into those captured at full size and those rendered small and upsampled (a third
-    of the engine's crops, at 12-60% of their size: far gauges, whose notches may not be resolved)."""
+    of the engine's crops, at 12-60% of their size: far gauges, whose notches may not be resolved).
+    With ``notch_check`` the major peaks are those it keeps, as in the reader."""
     from gauged.training.shards import open_crop_shard
 
     shard = open_crop_shard(shard_dir)
@@ -148,7 +152,11 @@ def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000) -> dict:
         captured = render_scale(sample.source, sample.image.shape[0])
         counts = [groups["all"]] + ([] if captured is None else [groups["full size" if captured == 1.0 else "upsampled"]])
         image = sample.image if sample.image.shape[0] == size else cv2.resize(sample.image, (size, size))
-        keypoints = decode_crop_maps(crop(to_model_input(image)), size, require_notches=False)
+        model_input = to_model_input(image)
+        logits = crop(model_input)
+        keypoints = decode_crop_maps(logits, size, require_notches=False)
+        if notch_check is not None:
+            keypoints = notch_check(model_input, logits, keypoints)
         match = match_points(keypoints.major.points, np.asarray(sample.points.get("major") or []).reshape(-1, 2), tol)
         found = []
         for name in ("start", "end"):
@@ -172,12 +180,18 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
     except ModelNotAvailable:
         detector_model = None  # reported as missing rather than failing the crop-model figures
     # Every ONNX file the reader ships: the two models, the OCR's int8 text detector and the number net.
-    files = [m.path for m in (crop, detector_model) if m is not None]
-    files += [p for p in map(packaged_model_path, (OCR_DET_INT8_MODEL, NUMBER_NET_MODEL)) if p.is_file()]
+    try:
+        notch_check: NotchCheck | None = NotchCheck(helper_model_path(NOTCH_CHECK_MODEL, models_dir), threads)
+    except ModelNotAvailable:
+        notch_check = None  # the notch figures are then the crop model's peaks alone
+    files = [m.path for m in (crop, detector_model, notch_check) if m is not None]
+    files += [p for p in (helper_model_path(n, models_dir) for n in (OCR_DET_INT8_MODEL, NUMBER_NET_MODEL)) if p.is_file()]
     result: dict = {"files_mb": round(sum(p.stat().st_size for p in files) / 2**20, 2),
                     "files": [p.name for p in files]}
     crop_input = np.zeros((crop.input_size, crop.input_size, 3), np.float32)
     result["speed_ms"] = {"crop_model": median_ms(lambda: crop(crop_input))}
+    if notch_check is not None and synth is not None:
+        result["speed_ms"]["crop_model_and_notch_check"] = _checked_crop_ms(crop, notch_check, synth)
     if detector_model is not None:
         detector = GaugeDetector(detector_model)
         frame = np.full((720, 1280, 3), 128, np.uint8)
@@ -192,14 +206,32 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
         result["needle"] = needle_metrics(crop, data / "needle-polygons",
                                           GaugeDetector(detector_model) if detector_model is not None else None)
     if synth is not None:
-        result["notches"] = notch_metrics(crop, synth)
+        result["notches"] = notch_metrics(crop, synth, notch_check=notch_check)
+        if notch_check is not None:
+            result["notches"]["peaks_alone"] = notch_metrics(crop, synth)
     return result
+
+
+def _checked_crop_ms(crop: OnnxModel, notch_check: NotchCheck, shard_dir: Path) -> float:
+    """Crop model, peak decoding and notch check on the shard's first crop, as the reader runs them."""
+    from gauged.training.shards import open_crop_shard
+
+    image = open_crop_shard(shard_dir).sample(0).image
+    model_input = to_model_input(cv2.resize(image, (crop.input_size, crop.input_size)))
+
+    def run() -> None:
+        logits = crop(model_input)
+        notch_check(model_input, logits, decode_crop_maps(logits, crop.input_size, require_notches=False))
+
+    return median_ms(run)
 
 
 def format_models(result: dict) -> str:
     speed = result["speed_ms"]
     lines = [f"model files: {result['files_mb']} MB ({', '.join(result.get('files', []))})",
              f"speed (median of 100): crop {speed['crop_model']:.1f} ms"
+             + (f" (with peaks and notch check {speed['crop_model_and_notch_check']:.1f} ms)"
+                if "crop_model_and_notch_check" in speed else "")
              + (f", detector {speed['detector_1280x720']:.1f} ms per 1280x720 frame" if "detector_1280x720" in speed else "")]
     if isinstance(result.get("detector"), str):
         lines.append(f"detector: {result['detector']}")
@@ -222,10 +254,13 @@ def format_models(result: dict) -> str:
                          f"direction within 3 deg {r['direction_within_3deg']:.1%} "
                          f"(median error {r['median_direction_error_deg']:.1f} deg)")
     if "notches" in result:
-        t = result["notches"]
-        lines.append(f"notches on {t['crops']} synthetic crops: recall {t['notch_recall_4px_at_448']:.1%}, "
-                     f"unassigned {t['unassigned_share']:.1%}, start/end found {t['start_end_found']:.1%}")
-        for name, g in t.get("by_capture", {}).items():
-            lines.append(f"  {g['crops']} crops captured {name}: recall {g['notch_recall_4px_at_448']:.1%}, "
-                         f"unassigned {g['unassigned_share']:.1%}, start/end found {g['start_end_found']:.1%}")
+        for title, t in (("", result["notches"]), (" (the crop model's peaks alone)", result["notches"].get("peaks_alone"))):
+            if t is None:
+                continue
+            checked = " after the notch check" if title == "" and "peaks_alone" in result["notches"] else ""
+            lines.append(f"notches on {t['crops']} synthetic crops{checked}{title}: recall {t['notch_recall_4px_at_448']:.1%}, "
+                         f"unassigned {t['unassigned_share']:.1%}, start/end found {t['start_end_found']:.1%}")
+            for name, g in t.get("by_capture", {}).items():
+                lines.append(f"  {g['crops']} crops captured {name}: recall {g['notch_recall_4px_at_448']:.1%}, "
+                             f"unassigned {g['unassigned_share']:.1%}, start/end found {g['start_end_found']:.1%}")
     return "\n".join(lines)

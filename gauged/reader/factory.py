@@ -8,6 +8,7 @@ from pathlib import Path
 
 from gauged.config.model import ReaderConfig
 from gauged.reader.detect import GaugeDetector
+from gauged.reader.notch_check import NotchCheck
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path
 from gauged.reader.pipeline import GaugeReader
 
@@ -17,6 +18,7 @@ CROP_MODEL = "crop.onnx"
 DETECTOR_MODEL = "detector.onnx"
 OCR_DET_INT8_MODEL = "ocr_det_int8.onnx"  # int8 copy of the OCR wheel's text detector (gauged.training.quantize_ocr)
 NUMBER_NET_MODEL = "numbers.onnx"  # the scale-number recogniser (gauged.training.number_lines)
+NOTCH_CHECK_MODEL = "notch_check.onnx"  # the second look at the major-notch peaks (gauged.training.notch_check)
 
 
 def model_path(name: str, models_dir: Path | None = None) -> Path:
@@ -24,10 +26,10 @@ def model_path(name: str, models_dir: Path | None = None) -> Path:
     return Path(models_dir) / name if models_dir is not None else packaged_model_path(name)
 
 
-def ocr_model_path(name: str, models_dir: Path | None = None) -> Path:
-    """The OCR's own model file (the number net, the int8 text detector): ``models_dir/name`` when a
-    candidate folder holds one, else the shipped file, so a folder with a candidate crop model alone
-    is read with the shipped OCR."""
+def helper_model_path(name: str, models_dir: Path | None = None) -> Path:
+    """A helper model's file (the number net, the int8 text detector, the notch check): ``models_dir/name``
+    when a candidate folder holds one, else the shipped file, so a folder with a candidate crop model
+    alone is read with the shipped helpers."""
     if models_dir is not None and (candidate := Path(models_dir) / name).is_file():
         return candidate
     return packaged_model_path(name)
@@ -44,14 +46,20 @@ def build_reader(config: ReaderConfig) -> GaugeReader:
     except ModelNotAvailable as exc:
         log.warning("%s; gauges without an roi cannot be found, photos are read as one gauge", exc)
         detector = None
+    notch_check = None
+    if config.notch_check:
+        try:
+            notch_check = NotchCheck(helper_model_path(NOTCH_CHECK_MODEL, config.models_dir), config.threads)
+        except ModelNotAvailable as exc:
+            log.warning("%s; every major-notch peak of the crop model is used", exc)
     from gauged.reader.ocr import ScaleTextReader
     from gauged.reader.ocr_engine import OcrUnavailable
 
     try:
         ocr = ScaleTextReader(threads=config.threads,
-                              int8_detector=ocr_model_path(OCR_DET_INT8_MODEL, config.models_dir) if config.ocr_int8_detector else None,
-                              number_net=ocr_model_path(NUMBER_NET_MODEL, config.models_dir) if config.ocr_number_net else None)
+                              int8_detector=helper_model_path(OCR_DET_INT8_MODEL, config.models_dir) if config.ocr_int8_detector else None,
+                              number_net=helper_model_path(NUMBER_NET_MODEL, config.models_dir) if config.ocr_number_net else None)
     except OcrUnavailable as exc:  # OCR is optional when every gauge has a configured scale
         log.warning("OCR is not available (%s): gauges without a configured scale cannot be read", exc)
         ocr = None
-    return GaugeReader(crop, detector, ocr, config.min_confidence)
+    return GaugeReader(crop, detector, ocr, config.min_confidence, notch_check=notch_check)

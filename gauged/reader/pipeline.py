@@ -22,6 +22,7 @@ from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
 from gauged.reader.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
 from gauged.reader.keypoints import CropKeypoints, Peaks, decode_crop_maps
 from gauged.reader.needle import NeedleReading, fit_needle
+from gauged.reader.notch_check import NotchCheck
 from gauged.reader.ocr import NO_NUMBERS
 from gauged.reader.onnx_model import OnnxModel, to_model_input
 from gauged.reader.reading import Value, read_value, value_on
@@ -167,8 +168,10 @@ class GaugeReader:
     """Reads gauges with the shipped models. Create once; ``read_image`` / ``read_box`` per frame."""
 
     def __init__(self, crop_model: OnnxModel, detector: GaugeDetector | None = None,
-                 ocr: ScaleTextReader | None = None, min_confidence: float = 0.5, crop_pad: float = 0.08):
+                 ocr: ScaleTextReader | None = None, min_confidence: float = 0.5, crop_pad: float = 0.08,
+                 notch_check: NotchCheck | None = None):
         self.crop_model = crop_model
+        self.notch_check = notch_check
         self.detector = detector
         self.ocr = ocr
         self.min_confidence = min_confidence
@@ -449,8 +452,11 @@ class GaugeReader:
             return False
         result.crop = crop
         with timer("keypoints"):
-            logits = self.crop_model(to_model_input(crop.image))
+            model_input = to_model_input(crop.image)
+            logits = self.crop_model(model_input)
             keypoints = decode_crop_maps(logits, self.crop_size, require_notches=require_notches)
+            if self.notch_check is not None and not isinstance(keypoints, StageFailure):
+                keypoints = self.notch_check(model_input, logits, keypoints)
         if isinstance(keypoints, StageFailure):
             result.failure = keypoints
             return False

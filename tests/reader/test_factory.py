@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from gauged.config.model import ReaderConfig
-from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, NUMBER_NET_MODEL, build_reader, model_path, ocr_model_path
+from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, NUMBER_NET_MODEL, build_reader, model_path, helper_model_path
 from gauged.reader.onnx_model import ModelNotAvailable, packaged_model_path
 
 
@@ -31,10 +31,10 @@ def test_build_reader_uses_the_candidate_folder(tmp_path):
 
 
 def test_the_ocr_models_come_from_the_candidate_folder_only_where_it_holds_them(tmp_path):
-    assert ocr_model_path(NUMBER_NET_MODEL, tmp_path) == packaged_model_path(NUMBER_NET_MODEL)
-    assert ocr_model_path(NUMBER_NET_MODEL) == packaged_model_path(NUMBER_NET_MODEL)
+    assert helper_model_path(NUMBER_NET_MODEL, tmp_path) == packaged_model_path(NUMBER_NET_MODEL)
+    assert helper_model_path(NUMBER_NET_MODEL) == packaged_model_path(NUMBER_NET_MODEL)
     (tmp_path / NUMBER_NET_MODEL).write_bytes(b"")
-    assert ocr_model_path(NUMBER_NET_MODEL, tmp_path) == tmp_path / NUMBER_NET_MODEL
+    assert helper_model_path(NUMBER_NET_MODEL, tmp_path) == tmp_path / NUMBER_NET_MODEL
 
 
 @pytest.mark.skipif(not (packaged_model_path(CROP_MODEL).is_file() and packaged_model_path(NUMBER_NET_MODEL).is_file()),
