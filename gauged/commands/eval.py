@@ -35,7 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     readings.add_argument("--json", action="store_true", help="print the full result as JSON")
     readings.add_argument("--threads", type=int, default=2)
     readings.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models "
-                               "(and numbers.onnx/ocr_det_int8.onnx, where it holds them)")
+                               "(and numbers.onnx/ocr_det_int8.onnx/notch_check.onnx, where it holds them)")
     readings.set_defaults(func=run_readings)
     models = sub.add_parser(
         "models", help="detector and crop-model metrics on the real sets (and synthetic crops)",
@@ -49,7 +49,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     models.add_argument("--json", action="store_true")
     models.add_argument("--threads", type=int, default=2)
     models.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models "
-                               "(and numbers.onnx/ocr_det_int8.onnx, where it holds them)")
+                               "(and numbers.onnx/ocr_det_int8.onnx/notch_check.onnx, where it holds them)")
     models.set_defaults(func=run_models)
     recording = sub.add_parser(
         "recording", help="readings of a replay against a synthetic recording's truth channel",

@@ -35,7 +35,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--scale", nargs="+", metavar=("MIN MAX", "UNIT"), help="known scale: MIN MAX [UNIT]")
     parser.add_argument("--threads", type=int, default=2, help="onnxruntime threads (default 2)")
     parser.add_argument("--min-confidence", type=float, default=0.5, help="refuse readings below this (default 0.5)")
-    parser.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models")
+    parser.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models "
+                        "(and numbers.onnx/ocr_det_int8.onnx/notch_check.onnx, where it holds them)")
     parser.set_defaults(func=run)
 
 

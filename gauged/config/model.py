@@ -98,7 +98,7 @@ class ReaderConfig(BaseModel):
     min_confidence: float = Field(0.5, ge=0, le=1, description="Readings below this confidence are refused.")
     models_dir: Path | None = Field(None, description="Folder whose crop.onnx/detector.onnx replace the shipped "
                                     "models (a candidate model under evaluation), and whose numbers.onnx/"
-                                    "ocr_det_int8.onnx do where it holds them; unset: the shipped ones.")
+                                    "ocr_det_int8.onnx/notch_check.onnx do where it holds them; unset: the shipped ones.")
     ocr_int8_detector: bool = Field(True, description="Run the OCR text detector as the shipped int8 copy of the "
                                     "OCR wheel's float model (2.7x faster, the same readings on the dev sets); "
                                     "false: the float model.")

@@ -43,18 +43,24 @@ def notch_windows(image_rgb01: np.ndarray, logits: np.ndarray, points: np.ndarra
     """
     size = image_rgb01.shape[0]
     prob = sigmoid(logits[list(MAP_CHANNELS)].astype(np.float32))
-    maps = np.stack([cv2.resize(p, (size, size), interpolation=cv2.INTER_LINEAR) for p in prob], -1)
-    full = np.concatenate([image_rgb01.astype(np.float32), maps], -1)
+    maps = cv2.resize(prob.transpose(1, 2, 0), (size, size), interpolation=cv2.INTER_LINEAR)
+    full = np.concatenate([image_rgb01.astype(np.float32, copy=False), maps], -1)
     half = cv2.resize(full, (size // 2, size // 2), interpolation=cv2.INTER_AREA)
-    pad = PATCH // 2
-    full = np.pad(full, ((pad, pad), (pad, pad), (0, 0)))
-    half = np.pad(half, ((pad, pad), (pad, pad), (0, 0)))
-    out = np.empty((len(points), 2 * full.shape[-1], PATCH, PATCH), np.float32)
+    depth = full.shape[-1]
+    out = np.zeros((len(points), PATCH, PATCH, 2 * depth), np.float32)
     for k, (x, y) in enumerate(np.asarray(points, float).reshape(-1, 2)):
-        cx, cy, hx, hy = (int(np.floor(v)) for v in (x, y, x / 2, y / 2))
-        window = np.concatenate([full[cy:cy + PATCH, cx:cx + PATCH], half[hy:hy + PATCH, hx:hx + PATCH]], -1)
-        out[k] = window.transpose(2, 0, 1)
-    return out
+        _paste(out[k, :, :, :depth], full, x, y)
+        _paste(out[k, :, :, depth:], half, x / 2, y / 2)
+    return np.ascontiguousarray(out.transpose(0, 3, 1, 2))
+
+
+def _paste(window: np.ndarray, source: np.ndarray, x: float, y: float) -> None:
+    """Copy the part of ``source`` inside the window centred on the pixel holding (x, y) into ``window``."""
+    left, top = int(np.floor(x)) - PATCH // 2, int(np.floor(y)) - PATCH // 2
+    x0, y0 = max(left, 0), max(top, 0)
+    x1, y1 = min(left + PATCH, source.shape[1]), min(top + PATCH, source.shape[0])
+    if x1 > x0 and y1 > y0:
+        window[y0 - top:y1 - top, x0 - left:x1 - left] = source[y0:y1, x0:x1]
 
 
 def peak_features(peaks: Peaks, pivot: Peaks, size: int) -> np.ndarray:

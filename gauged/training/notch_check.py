@@ -6,11 +6,16 @@ a labelled major notch within issue 4's tolerance (4 px at 448) is a 1, a peak f
 tolerance from every labelled major is a 0, and the near misses in between are left out of training
 (they lie on a major notch, only off by a pixel or two).
 
-    python -m gauged.training.notch_check peaks --shard data/synth-256 --out data/notch-train-a.npz
-    python -m gauged.training.notch_check peaks --shard data/synth-256b --out data/notch-train-b.npz
+    python -m gauged.training.prerender crops --seed 100000 --count 12000 --size 256 --out data/synth-256b
+    python -m gauged.training.prerender crops --seed 200000 --count 1000 --size 256 --out data/synth-256t
+    python -m gauged.training.notch_check peaks --shard data/synth-256 --out data/notch-train-a.npz   # 2 min
+    python -m gauged.training.notch_check peaks --shard data/synth-256b --out data/notch-train-b.npz  # 3 min
     python -m gauged.training.notch_check peaks --shard data/synth-256t --out data/notch-tune.npz
     python -m gauged.training.notch_check train --data data/notch-train-a.npz data/notch-train-b.npz \\
-        --tune data/notch-tune.npz --run runs/notch-check --export gauged/models/notch_check.onnx
+        --tune data/notch-tune.npz --run runs/notch-w24 --export gauged/models/notch_check.onnx    # 16 min
+
+(``data/synth-256`` is the crop model's own training shard, seeds 0-7999; the held-out validation
+shard ``data/synth-val-256`` starts at seed 1,000,000.)
 
 The threshold written into the file is chosen on ``--tune`` (crops of seeds kept apart from both the
 training data and the held-out validation shard): the lowest at which the kept peaks are at most
@@ -86,7 +91,7 @@ class NotchCheckNet(nn.Module):
     """Six 3x3 convolutions (three of stride 2) over the windows, mean- and max-pooled, and two dense
     layers with the peak's features: one logit per peak. ``width`` channels at first."""
 
-    def __init__(self, width: int = 16):
+    def __init__(self, width: int = 24):
         super().__init__()
         self.width = width
         self.body = nn.Sequential(_block(CHANNELS, width, 2), _block(width, width, 1), _block(width, 2 * width, 2),
@@ -132,7 +137,7 @@ def choose_threshold(p: np.ndarray, labels: np.ndarray, target: float = TARGET_U
     return 0.99
 
 
-def train(data: list[Path], tune: Path, run: Path, epochs: int = 10, width: int = 16, batch: int = 256,
+def train(data: list[Path], tune: Path, run: Path, epochs: int = 12, width: int = 24, batch: int = 256,
           lr: float = 3e-3, threads: int = 2, seed: int = 0) -> dict:
     """Train, tune the threshold after each epoch, keep the epoch whose kept-major share at its
     threshold is highest (``run/best.pt``), and return its figures."""
@@ -218,8 +223,8 @@ def main(argv: list[str] | None = None) -> int:
     fit.add_argument("--data", type=Path, nargs="+", required=True, help="`peaks` files to train on")
     fit.add_argument("--tune", type=Path, required=True, help="a `peaks` file of other seeds, for the threshold")
     fit.add_argument("--run", type=Path, required=True, help="run directory (checkpoints, history.jsonl)")
-    fit.add_argument("--epochs", type=int, default=10)
-    fit.add_argument("--width", type=int, default=16, help="first-layer channels (default %(default)s)")
+    fit.add_argument("--epochs", type=int, default=12)
+    fit.add_argument("--width", type=int, default=24, help="first-layer channels (default %(default)s, the shipped file's)")
     fit.add_argument("--lr", type=float, default=3e-3)
     fit.add_argument("--threads", type=int, default=2)
     fit.add_argument("--export", type=Path, help="write the best epoch as ONNX here when done")
