@@ -105,9 +105,9 @@ class ReaderConfig(BaseModel):
     ocr_number_net: bool = Field(True, description="When a dial's numbers give no scale, read them again with the "
                                  "shipped number net (numbers.onnx) too and keep a scale it gives (docs/ocr.md); "
                                  "false: PP-OCR's recogniser alone.")
-    notch_check: bool = Field(True, description="Look again at each major-notch peak of the crop model with the "
-                              "shipped notch check (notch_check.onnx) and drop those it takes for minor ticks "
-                              "(gauged/models/README.md); false: use every peak.")
+    notch_check: bool = Field(True, description="A dial refused because its notch peaks fit no scale ring (after "
+                              "every other look) is read once more on the major peaks the shipped notch check "
+                              "(notch_check.onnx) keeps, without the minor ticks it drops; false: never.")
 
 
 class ScaleLockConfig(BaseModel):

@@ -27,7 +27,8 @@ from gauged.types import Ellipse, StageFailure
 
 STAGE = "ellipse"
 NUMBERS_OUTSIDE_SCALE = "numbers_outside_scale"
-REASONS = ("too_few_notches", "degenerate_conic", "poor_fit", "too_oblique", "no_scale_ends", "implausible_span",
+POOR_FIT = "poor_fit"
+REASONS = ("too_few_notches", "degenerate_conic", POOR_FIT, "too_oblique", "no_scale_ends", "implausible_span",
            NUMBERS_OUTSIDE_SCALE)
 
 TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
@@ -476,18 +477,18 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
             # any centre; the scale is centred on the needle's pivot, so it is fitted about that.
             centred = _centred_fit(points, pivot, TOLERANCE * crop_size)
             if centred is None:
-                return StageFailure(STAGE, "poor_fit", f"the needle pivot lies {off:.2f} radii from the ring's centre")
+                return StageFailure(STAGE, POOR_FIT, f"the needle pivot lies {off:.2f} radii from the ring's centre")
             ellipse, inliers = centred
             explained = int(inliers.sum())
     if ellipse.b / ellipse.a < min_axis_ratio:
         return StageFailure(STAGE, "too_oblique", f"axis ratio {ellipse.b / ellipse.a:.2f} < {min_axis_ratio}")
     if explained < max(min_notches, _share_needed(keypoints, ellipse, inliers, ends) * len(points)):
-        return StageFailure(STAGE, "poor_fit", f"only {explained} of {len(points)} notches lie on the scale ring(s)")
+        return StageFailure(STAGE, POOR_FIT, f"only {explained} of {len(points)} notches lie on the scale ring(s)")
     rms = float(np.sqrt(np.mean(orthogonal_distance(ellipse, points[inliers]) ** 2)))
     # The notch peaks themselves are good to about a pixel, so a small ring gets an absolute floor.
     rms_limit = max(max_rms_fraction * ellipse.a, 0.5 * TOLERANCE * crop_size)
     if rms > rms_limit:
-        return StageFailure(STAGE, "poor_fit", f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
+        return StageFailure(STAGE, POOR_FIT, f"notch RMS {rms:.1f} px on a radius of {ellipse.a:.0f} px")
     centre = ellipse.center
     # Under perspective the dial's centre (the pivot) is not the ellipse's centre, and only a frame
     # through the pivot reads angles right; but a pixel of pivot error costs ~1 degree on a small

@@ -218,3 +218,21 @@ def test_real_dual_unit_dials_are_read_in_each_scales_own_unit(shared_datasets, 
     assert len(read.other_readings) == len(units) - 1
     rec = record(str(path), 0, read, None)
     assert [(o["unit"], o["value"]) for o in rec["other_scales"]] == [(s.unit, v) for v, s in read.other_readings]
+
+
+@pytest.mark.skipif(not packaged_model_path("notch_check.onnx").is_file(), reason="gauged/models/notch_check.onnx is not shipped")
+def test_a_ring_refused_for_its_minor_tick_peaks_is_read_on_the_notches_the_check_keeps():
+    """Held-out render 314 of seed 9,000,000: the crop model's major peaks include minor ticks and
+    fit no ring (poor_fit); read again on the peaks the notch check keeps, the dial is read right."""
+    image, record = _render(9_000_000, 314)
+    gauge = record["gauges"][0]
+    (refused,) = _full_reader(notch_check=False).read_image(image)
+    assert refused.value is None and (refused.failure.stage, refused.failure.reason) == ("ellipse", "poor_fit")
+    reader = _full_reader()
+    read = _read_right(reader, image, gauge)
+    assert len(read.keypoints.major) < len(refused.keypoints.major)  # the peaks the check dropped
+    # The daemon reads a configured ROI with read_box, which takes the same last look.
+    whole = (0.0, 0.0, float(image.shape[1]), float(image.shape[0]))
+    assert _full_reader(notch_check=False).read_box(image, whole).failure.reason == "poor_fit"
+    roi = reader.read_box(image, whole)
+    assert roi.failure is None and abs(roi.value.value - gauge["value"]) <= 0.01 * (gauge["max"] - gauge["min"])
