@@ -179,7 +179,7 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
         detector_model: OnnxModel | None = OnnxModel(model_path(DETECTOR_MODEL, models_dir), threads)
     except ModelNotAvailable:
         detector_model = None  # reported as missing rather than failing the crop-model figures
-    # Every ONNX file the reader ships: the two models, the OCR's int8 text detector and the number net.
+    # Every ONNX file the reader ships: the two models, the notch check, the OCR's int8 text detector and the number net.
     try:
         notch_check: NotchCheck | None = NotchCheck(helper_model_path(NOTCH_CHECK_MODEL, models_dir), threads)
     except ModelNotAvailable:

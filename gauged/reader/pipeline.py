@@ -196,7 +196,8 @@ class GaugeReader:
         scene of several dials it seldom gets past the ellipse, and then changes nothing. A dial found
         and then refused (needle, OCR, scale) is not read again: on the held-out renders a second try
         at such dials answered three of them 4-5x the span off (each check passes a wrong scale now and
-        then, and every try is another chance for one to pass).
+        then, and every try is another chance for one to pass). A read still refused because its notch
+        peaks fit no ring gets the notch check's last look (:meth:`_ring_of_checked_notches`).
         """
         reads = self._read_all(image, known, primary_unit)
         if isinstance(reads, StageFailure) or self.notch_check is None:
@@ -205,14 +206,16 @@ class GaugeReader:
 
     def _ring_of_checked_notches(self, image: np.ndarray, read: GaugeRead, known: KnownScale | None,
                                  primary_unit: str | None) -> GaugeRead:
-        """A read refused because its notch peaks fit no ring (``poor_fit``, after every other look),
-        read once more in the same box on the major peaks the notch check keeps; the read that got
-        further is kept.
+        """A read refused because its notch peaks fit no ring (``poor_fit``, after the reader's other
+        looks), read once more in the same box on the major peaks the notch check keeps; the read that
+        got further is kept.
 
         The crop model's major peaks include minor ticks, which bend the ring through them; the notch
         check drops most of them (gauged/models/README.md, session 25). It is the last look, and only
-        at rings refused: kept on every crop, or tried before the reader's other looks, it changed
-        right readings too, some of them to wild ones (docs/accuracy.md, session 25)."""
+        at rings refused. Kept on every crop, it changed right readings too, some of them to wild ones
+        (docs/accuracy.md, session 25); tried before the larger box of :meth:`_read_detection`, it
+        passed a wrong ring on a real dual-scale dial that the larger box reads.
+        """
         if read.failure is None or read.failure.stage != "ellipse" or read.failure.reason != POOR_FIT:
             return read
         again = self._read_once(image, read.box, read.score, known, primary_unit, check_notches=True)
