@@ -1,12 +1,13 @@
 """Which major notches the crop model misses, and what its unassigned peaks sit on.
 
-    python bench/notch_kinds.py --shard data/synth-val-256 [--model gauged/models/crop.onnx] [--group "full size"]
+    python bench/notch_kinds.py --shard data/synth-val-256 [--model gauged/models/crop.onnx] [--group "full size"] [--check]
 
 ``--shard`` is the held-out crop shard `gauged eval models` scores (`python -m
 gauged.training.prerender crops --seed 1000000 --count 500 --size 256 --out data/synth-val-256`).
 Each crop is rendered again from its seed, so every notch's kind is known: its scale's role, its
 drawing style, whether a number is printed at it, how far apart the scale's majors are, and where
-the minor notches are. Peaks are the reader's (`decode_crop_maps`, threshold 0.3); the tolerance is
+the minor notches are. Peaks are the reader's (`decode_crop_maps`, threshold 0.3), and with
+``--check`` only those the notch check keeps (`gauged/models/notch_check.onnx`); the tolerance is
 issue 4's 4 px at 448 px. Prints:
 
 - recall by kind of labelled major notch (a peak within the tolerance of it);
@@ -33,7 +34,8 @@ import numpy as np  # noqa: E402
 
 from gauged.evaluation.models import render_scale  # noqa: E402
 from gauged.reader.keypoints import decode_crop_maps  # noqa: E402
-from gauged.reader.onnx_model import OnnxModel, to_model_input  # noqa: E402
+from gauged.reader.notch_check import NotchCheck  # noqa: E402
+from gauged.reader.onnx_model import OnnxModel, packaged_model_path, to_model_input  # noqa: E402
 from gauged.synth.crop import render_crop  # noqa: E402
 from gauged.training.shards import open_crop_shard  # noqa: E402
 
@@ -76,11 +78,13 @@ def main() -> int:
     parser.add_argument("--shard", type=Path, required=True, help="crop shard of the synthetic engine")
     parser.add_argument("--model", type=Path, default=Path("gauged/models/crop.onnx"))
     parser.add_argument("--group", choices=GROUPS, default="full size", help="crops captured at full size, upsampled, or all")
+    parser.add_argument("--check", action="store_true", help="only the peaks the shipped notch check keeps")
     args = parser.parse_args()
     if not (args.shard / "labels.jsonl").is_file():
         parser.error(f"{args.shard} is not a crop shard (no labels.jsonl); make one with gauged.training.prerender crops")
     header("which major notches are missed, and what the unassigned peaks lie on")
     model = OnnxModel(args.model, threads=2)
+    check = NotchCheck(packaged_model_path("notch_check.onnx"), threads=2) if args.check else None
     shard = open_crop_shard(args.shard)
     size = model.input_size
     tol = 4.0 * size / 448
@@ -98,7 +102,12 @@ def main() -> int:
             continue
         crops += 1
         crop = render_crop(int(sample.source.split("/")[1]), size, masks=False)
-        peaks = decode_crop_maps(model(to_model_input(sample.image)), size, require_notches=False).major.points.reshape(-1, 2)
+        model_input = to_model_input(sample.image)
+        logits = model(model_input)
+        keypoints = decode_crop_maps(logits, size, require_notches=False)
+        if check is not None:
+            keypoints = check(model_input, logits, keypoints)
+        peaks = keypoints.major.points.reshape(-1, 2)
         labelled = np.asarray(sample.points.get("major") or [], float).reshape(-1, 2)
         every_major, minors = [], []
         for truth, scale in zip(crop.truth["scales"], crop.params.scales):
@@ -122,7 +131,8 @@ def main() -> int:
         numbers = np.asarray(sample.points.get("numbers") or [], float).reshape(-1, 2)
         for p in peaks:
             peaks_on[peak_kind(p, labelled, every_major, minors, numbers, sample.needle, tol)] += 1
-    print(f"# {crops} crops ({args.group}) at {size} px, tolerance {tol:.2f} px (4 px at 448)")
+    print(f"# {crops} crops ({args.group}) at {size} px, tolerance {tol:.2f} px (4 px at 448)"
+          + (", peaks the notch check keeps" if check is not None else ""))
     print("recall by kind of labelled major notch:")
     for kind, (count, hit) in sorted(recall.items()):
         print(f"  {kind:24s} {count:5d}  {hit / count:6.1%}")

@@ -65,6 +65,9 @@ def run_onnx() -> None:
 
                 print(f"onnx: {path.name} -> {NumberNet(path, threads=2).read([np.zeros((20, 40, 3), np.uint8)])}")
                 continue
+            if path.name == "notch_check.onnx":  # looks at the crop model's peaks, not at an image
+                run_notch_check(path)
+                continue
             model = OnnxModel(path, threads=2)
             out = model(np.zeros((model.input_size, model.input_size, 3), np.float32))
             print(f"onnx: {path.name} -> {out.shape}")
@@ -80,6 +83,19 @@ def run_onnx() -> None:
     (inp,) = session.get_inputs()
     out = session.run(None, {inp.name: np.zeros([d if isinstance(d, int) else 1 for d in inp.shape], np.float32)})
     print(f"onnx: bundled sigmoid.onnx -> {out[0].shape} (no model shipped in gauged/models yet)")
+
+
+def run_notch_check(path: Path) -> None:
+    import numpy as np
+
+    from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps
+    from gauged.reader.notch_check import NotchCheck
+
+    logits = np.full((len(CROP_CHANNELS), 128, 128), -5.0, np.float32)
+    logits[CROP_CHANNELS.index("major"), 40, 60] = 5.0
+    keypoints = decode_crop_maps(logits, 256)
+    p = NotchCheck(path, threads=2).probabilities(np.zeros((256, 256, 3), np.float32), logits, keypoints)
+    print(f"onnx: {path.name} -> {p.shape} for {len(keypoints.major)} peak")
 
 
 def decode_jpeg() -> None:
