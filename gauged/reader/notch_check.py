@@ -16,16 +16,14 @@ This stage is pure: crop, logits and keypoints in, keypoints out.
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import numpy as np
-import onnxruntime as ort
 
 from gauged.reader.keypoints import CROP_CHANNELS, CropKeypoints, Peaks, sigmoid
-from gauged.reader.onnx_model import ModelNotAvailable, session_options
+from gauged.reader.onnx_model import load_session
 
 PATCH = 40  # window side in pixels, at the crop's resolution and at half of it
 MAP_CHANNELS = (CROP_CHANNELS.index("major"), CROP_CHANNELS.index("numbers"))
@@ -78,13 +76,7 @@ class NotchCheck:
     """The ``notch_check.onnx`` session, created once; call it on a crop's model input, logits and keypoints."""
 
     def __init__(self, path: Path, threads: int = 1, threshold: float | None = None):
-        if not path.is_file():
-            raise ModelNotAvailable(f"model file {path} is missing: train and export it (see gauged/models/README.md)")
-        try:
-            self.session = ort.InferenceSession(str(path), session_options(threads), providers=["CPUExecutionProvider"])
-        except Exception as exc:  # onnxruntime raises its own hierarchy for corrupt files
-            raise ModelNotAvailable(f"cannot load model {path}: {exc}") from exc
-        self.metadata: dict = json.loads(self.session.get_modelmeta().custom_metadata_map.get("gauged", "{}"))
+        self.session, self.metadata = load_session(path, threads)
         self.threshold = float(self.metadata.get("threshold", 0.5) if threshold is None else threshold)
         if not 0.0 <= self.threshold <= 1.0:
             raise ValueError(f"notch check threshold must be in [0, 1], got {self.threshold}")

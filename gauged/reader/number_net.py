@@ -18,7 +18,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gauged.reader.onnx_model import ModelNotAvailable, session_options
+from gauged.reader.onnx_model import load_session
 
 CHARS = "0123456789.,-"
 LINE_HEIGHT, LINE_WIDTH = 32, 128
@@ -48,12 +48,8 @@ class NumberNet:
     """``read(lines)`` -> the net's string for each (h, w, 3) uint8 BGR line, upright."""
 
     def __init__(self, path: Path, threads: int = 2):
-        import onnxruntime as ort
-
-        if not path.is_file():
-            raise ModelNotAvailable(f"model file {path} is missing: train and export it (docs/ocr.md)")
         self.path = path
-        self.session = ort.InferenceSession(str(path), session_options(threads), providers=["CPUExecutionProvider"])
+        self.session, _ = load_session(path, threads, how_to_make="docs/ocr.md")
 
     def read(self, lines: Sequence[np.ndarray]) -> list[str]:
         if not lines:

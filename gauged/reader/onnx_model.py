@@ -37,6 +37,19 @@ def session_options(threads: int) -> ort.SessionOptions:
     return options
 
 
+def load_session(path: Path, threads: int, how_to_make: str = "see gauged/models/README.md"
+                 ) -> tuple[ort.InferenceSession, dict]:
+    """A CPU session of the ONNX file ``path`` and the JSON of its ``gauged`` metadata key ({} when
+    it has none); :class:`ModelNotAvailable` names the file when it is missing or unreadable."""
+    if not path.is_file():
+        raise ModelNotAvailable(f"model file {path} is missing: train and export it ({how_to_make})")
+    try:
+        session = ort.InferenceSession(str(path), session_options(threads), providers=["CPUExecutionProvider"])
+    except Exception as exc:  # onnxruntime raises its own hierarchy for corrupt files
+        raise ModelNotAvailable(f"cannot load model {path}: {exc}") from exc
+    return session, json.loads(session.get_modelmeta().custom_metadata_map.get("gauged", "{}"))
+
+
 class OnnxModel:
     """One onnxruntime session, created once, with a fixed NCHW float input and validated calls.
 
@@ -44,14 +57,7 @@ class OnnxModel:
     """
 
     def __init__(self, path: Path, threads: int = 2):
-        if not path.is_file():
-            raise ModelNotAvailable(f"model file {path} is missing: train and export it (see gauged/models/README.md)")
-        try:
-            self.session = ort.InferenceSession(str(path), session_options(threads), providers=["CPUExecutionProvider"])
-        except Exception as exc:  # onnxruntime raises its own hierarchy for corrupt files
-            raise ModelNotAvailable(f"cannot load model {path}: {exc}") from exc
-        meta = self.session.get_modelmeta().custom_metadata_map
-        self.metadata: dict = json.loads(meta.get("gauged", "{}"))
+        self.session, self.metadata = load_session(path, threads)
         (inp,) = self.session.get_inputs()
         self.input_name = inp.name
         self.input_shape = tuple(inp.shape)  # (1, 3, S, S)
