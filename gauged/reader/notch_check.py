@@ -84,6 +84,10 @@ class NotchCheck:
 
     def probabilities(self, image_rgb01: np.ndarray, logits: np.ndarray, keypoints: CropKeypoints) -> np.ndarray:
         """P(labelled major notch) for each of ``keypoints.major``'s peaks, (N,) float."""
+        size = image_rgb01.shape[0]
+        if image_rgb01.shape != (size, size, 3) or logits.shape != (len(CROP_CHANNELS), size // 2, size // 2):
+            raise ValueError(f"the notch check takes a crop model's (S, S, 3) input and its ({len(CROP_CHANNELS)}, S/2, S/2) "
+                             f"logits, got {image_rgb01.shape} and {logits.shape}")
         if not len(keypoints.major):
             return np.zeros(0)
         windows = notch_windows(image_rgb01, logits, keypoints.major.points)

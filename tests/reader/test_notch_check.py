@@ -60,6 +60,16 @@ def test_a_missing_file_or_a_threshold_outside_zero_to_one_is_refused(tmp_path):
             NotchCheck(packaged_model_path(NOTCH_CHECK_MODEL), threshold=1.5)
 
 
+@shipped
+def test_a_crop_and_logits_that_do_not_belong_together_are_refused():
+    model_input, logits, keypoints, _, _ = _engine_crop(1_000_003)
+    check = NotchCheck(packaged_model_path(NOTCH_CHECK_MODEL), threads=1)
+    with pytest.raises(ValueError, match="notch check takes"):
+        check(model_input[:128, :128], logits, keypoints)
+    with pytest.raises(ValueError, match="notch check takes"):
+        check(model_input, logits[:6], keypoints)
+
+
 def _engine_crop(seed: int):
     from gauged.synth.crop import render_crop
 
