@@ -40,7 +40,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     models = sub.add_parser(
         "models", help="detector and crop-model metrics on the real sets (and synthetic crops)",
         description="Detector: box IoU and recall at IoU 0.5 on substation-dials. Crop model: needle mask IoU "
-        "and direction on needle-polygons/valid; notch recall within 4 px at 448 px on a synthetic crop shard.",
+        "and direction on needle-polygons/valid; notch recall within 4 px at 448 px, unassigned peaks and ends found on "
+        "a synthetic crop shard, after the notch check (notch_check.onnx) and of the crop model's peaks alone.",
         epilog="example: gauged eval models --data ../shared/datasets --synth data/crop-val")
     models.add_argument("--data", type=Path, required=True, help="the shared datasets folder")
     models.add_argument("--synth", type=Path, help="synthetic validation crop shard (notch metrics)")
