@@ -25,7 +25,7 @@ from gauged.evaluation.timing import median_s
 from gauged.reader.detect import GaugeDetector
 from gauged.reader.factory import (CROP_MODEL, DETECTOR_MODEL, NOTCH_CHECK_MODEL, NUMBER_NET_MODEL, OCR_DET_INT8_MODEL,
                                    helper_model_path, model_path)
-from gauged.reader.keypoints import decode_crop_maps
+from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
 from gauged.reader.notch_check import NotchCheck
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, to_model_input
 from gauged.types import StageFailure
@@ -140,32 +140,49 @@ def notch_metrics(crop: OnnxModel, shard_dir: Path, limit: int = 1000, notch_che
     """Notch recall, unassigned share and ends found on a shard's crops; ``by_capture`` splits the
     engine's crops into those captured at full size and those rendered small and upsampled (a third
     of the engine's crops, at 12-60% of their size: far gauges, whose notches may not be resolved).
-    With ``notch_check`` the major peaks are those it keeps, as in the reader."""
+    With ``notch_check`` the major peaks are those it keeps, and ``peaks_alone`` holds the same
+    figures of the crop model's peaks, from the same run of the crop model."""
     from gauged.training.shards import open_crop_shard
 
     shard = open_crop_shard(shard_dir)
     size = crop.input_size
     tol = 4.0 * size / 448
-    groups = {"all": _NotchCounts(), "full size": _NotchCounts(), "upsampled": _NotchCounts()}
+    variants = ["checked", "alone"] if notch_check is not None else ["alone"]
+    groups = {v: {"all": _NotchCounts(), "full size": _NotchCounts(), "upsampled": _NotchCounts()} for v in variants}
     for index in range(min(limit, len(shard))):
         sample = shard.sample(index)
         captured = render_scale(sample.source, sample.image.shape[0])
-        counts = [groups["all"]] + ([] if captured is None else [groups["full size" if captured == 1.0 else "upsampled"]])
+        names = ["all"] + ([] if captured is None else ["full size" if captured == 1.0 else "upsampled"])
         image = sample.image if sample.image.shape[0] == size else cv2.resize(sample.image, (size, size))
         model_input = to_model_input(image)
         logits = crop(model_input)
-        keypoints = decode_crop_maps(logits, size, require_notches=False)
+        alone = decode_crop_maps(logits, size, require_notches=False)
+        keypoints = {"alone": alone}
         if notch_check is not None:
-            keypoints = notch_check(model_input, logits, keypoints)
-        match = match_points(keypoints.major.points, np.asarray(sample.points.get("major") or []).reshape(-1, 2), tol)
-        found = []
-        for name in ("start", "end"):
-            truth = sample.points.get(name)
-            if truth:
-                peaks = getattr(keypoints, name)
-                found.append(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - truth[0]) <= tol)
-        for group in counts:
-            group.add(match, found)
+            keypoints["checked"] = notch_check(model_input, logits, alone)
+        for variant in variants:
+            match, found = _notch_match(keypoints[variant], sample, tol)
+            for name in names:
+                groups[variant][name].add(match, found)
+    results = {variant: _notch_figures(counts) for variant, counts in groups.items()}
+    if notch_check is None:
+        return results["alone"]
+    return {**results["checked"], "peaks_alone": results["alone"]}
+
+
+def _notch_match(keypoints: CropKeypoints, sample, tol: float):
+    """The major-notch match of one crop's keypoints and, per labelled end, whether it was found."""
+    match = match_points(keypoints.major.points, np.asarray(sample.points.get("major") or []).reshape(-1, 2), tol)
+    found = []
+    for name in ("start", "end"):
+        truth = sample.points.get(name)
+        if truth:
+            peaks = getattr(keypoints, name)
+            found.append(len(peaks) > 0 and np.linalg.norm(peaks.points[0] - truth[0]) <= tol)
+    return match, found
+
+
+def _notch_figures(groups: dict[str, _NotchCounts]) -> dict:
     result = groups["all"].to_dict()
     if groups["full size"].crops or groups["upsampled"].crops:
         result["by_capture"] = {name: groups[name].to_dict() for name in ("full size", "upsampled")}
@@ -207,8 +224,6 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
                                           GaugeDetector(detector_model) if detector_model is not None else None)
     if synth is not None:
         result["notches"] = notch_metrics(crop, synth, notch_check=notch_check)
-        if notch_check is not None:
-            result["notches"]["peaks_alone"] = notch_metrics(crop, synth)
     return result
 
 

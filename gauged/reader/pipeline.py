@@ -200,7 +200,7 @@ class GaugeReader:
         peaks fit no ring gets the notch check's last look (:meth:`_ring_of_checked_notches`).
         """
         reads = self._read_all(image, known, primary_unit)
-        if isinstance(reads, StageFailure) or self.notch_check is None:
+        if isinstance(reads, StageFailure):
             return reads
         return [self._ring_of_checked_notches(image, read, known, primary_unit) for read in reads]
 
@@ -216,7 +216,8 @@ class GaugeReader:
         (docs/accuracy.md, session 25); tried before the larger box of :meth:`_read_detection`, it
         passed a wrong ring on a real dual-scale dial that the larger box reads.
         """
-        if read.failure is None or read.failure.stage != "ellipse" or read.failure.reason != POOR_FIT:
+        if (self.notch_check is None or read.failure is None or read.failure.stage != "ellipse"
+                or read.failure.reason != POOR_FIT):
             return read
         again = self._read_once(image, read.box, read.score, known, primary_unit, check_notches=True)
         return again if _progress(again) > _progress(read) else read
@@ -277,12 +278,13 @@ class GaugeReader:
                  primary_unit: str | None = None) -> GaugeRead:
         """Read the gauge inside ``box`` (frame pixels) of (H, W, 3) uint8 BGR ``image`` (a configured
         ROI or a detection), with the notch check's last look when its ring is refused."""
-        read = self._read_once(image, box, score, known, primary_unit)
-        return read if self.notch_check is None else self._ring_of_checked_notches(image, read, known, primary_unit)
+        return self._ring_of_checked_notches(image, self._read_once(image, box, score, known, primary_unit),
+                                            known, primary_unit)
 
     def _read_once(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
                    primary_unit: str | None = None, check_notches: bool = False) -> GaugeRead:
-        """One read of the gauge inside ``box``; with ``check_notches``, on the major peaks the notch check keeps."""
+        """One read of the gauge inside ``box``; with ``check_notches`` (only when the reader has a
+        notch check), on the major peaks the notch check keeps."""
         result = GaugeRead(box=box, score=score)
         timer = _Timer(result.seconds)
         if not self._crop_and_keypoints(image, box, result, timer, require_notches=True, check_notches=check_notches):
@@ -487,7 +489,7 @@ class GaugeReader:
             model_input = to_model_input(crop.image)
             logits = self.crop_model(model_input)
             keypoints = decode_crop_maps(logits, self.crop_size, require_notches=require_notches)
-            if check_notches and self.notch_check is not None and not isinstance(keypoints, StageFailure):
+            if check_notches and not isinstance(keypoints, StageFailure):
                 keypoints = self.notch_check(model_input, logits, keypoints)
         if isinstance(keypoints, StageFailure):
             result.failure = keypoints

@@ -157,33 +157,33 @@ def train(data: list[Path], tune: Path, run: Path, epochs: int = 12, width: int 
     optimiser = torch.optim.AdamW(net.parameters(), lr, weight_decay=1e-4)
     schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, lr, total_steps=steps)
     best: dict = {}
-    history = (run / "history.jsonl").open("a")
-    for epoch in range(1, epochs + 1):
-        started, total = time.monotonic(), 0.0
-        order = torch.randperm(len(target))
-        for i in range(0, len(target) - batch + 1, batch):
-            index = order[i:i + batch]
-            x = torch.rot90(windows[index].float() / 255, int(rng.integers(4)), (2, 3))  # a tick points any way
-            if rng.random() < 0.5:
-                x = x.flip(3)
-            loss = nn.functional.binary_cross_entropy_with_logits(net(x, features[index]), target[index])
-            optimiser.zero_grad()
-            loss.backward()
-            optimiser.step()
-            schedule.step()
-            total += loss.item()
-        p = predict(net, tune_set)
-        threshold = choose_threshold(p, tune_set["labels"])
-        row = {"epoch": epoch, "loss": total / max(1, len(target) // batch), "threshold": threshold,
-               **{f"tune_{k}": v for k, v in kept_figures(p, tune_set["labels"], threshold).items()},
-               "seconds": round(time.monotonic() - started)}
-        history.write(json.dumps(row) + "\n")
-        history.flush()
-        log.info("epoch %d: %s", epoch, json.dumps(row))
-        torch.save({"state": net.state_dict(), "width": width, "row": row}, run / f"epoch{epoch}.pt")
-        if not best or row["tune_major_kept"] > best["tune_major_kept"]:
-            best = row
-            torch.save({"state": net.state_dict(), "width": width, "row": row}, run / "best.pt")
+    with (run / "history.jsonl").open("a") as history:
+        for epoch in range(1, epochs + 1):
+            started, total = time.monotonic(), 0.0
+            order = torch.randperm(len(target))
+            for i in range(0, len(target) - batch + 1, batch):
+                index = order[i:i + batch]
+                x = torch.rot90(windows[index].float() / 255, int(rng.integers(4)), (2, 3))  # a tick points any way
+                if rng.random() < 0.5:
+                    x = x.flip(3)
+                loss = nn.functional.binary_cross_entropy_with_logits(net(x, features[index]), target[index])
+                optimiser.zero_grad()
+                loss.backward()
+                optimiser.step()
+                schedule.step()
+                total += loss.item()
+            p = predict(net, tune_set)
+            threshold = choose_threshold(p, tune_set["labels"])
+            row = {"epoch": epoch, "loss": total / max(1, len(target) // batch), "threshold": threshold,
+                   **{f"tune_{k}": v for k, v in kept_figures(p, tune_set["labels"], threshold).items()},
+                   "seconds": round(time.monotonic() - started)}
+            history.write(json.dumps(row) + "\n")
+            history.flush()
+            log.info("epoch %d: %s", epoch, json.dumps(row))
+            torch.save({"state": net.state_dict(), "width": width, "row": row}, run / f"epoch{epoch}.pt")
+            if not best or row["tune_major_kept"] > best["tune_major_kept"]:
+                best = row
+                torch.save({"state": net.state_dict(), "width": width, "row": row}, run / "best.pt")
     return best
 
 

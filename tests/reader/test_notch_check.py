@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -70,10 +72,15 @@ def test_a_crop_and_logits_that_do_not_belong_together_are_refused():
         check(model_input, logits[:6], keypoints)
 
 
+@functools.cache
+def _crop_model() -> OnnxModel:
+    return OnnxModel(packaged_model_path(CROP_MODEL), threads=1)
+
+
 def _engine_crop(seed: int):
     from gauged.synth.crop import render_crop
 
-    crop = OnnxModel(packaged_model_path(CROP_MODEL), threads=1)
+    crop = _crop_model()
     rendered = render_crop(seed, crop.input_size, masks=False)
     model_input = to_model_input(rendered.image)
     logits = crop(model_input)
