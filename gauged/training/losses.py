@@ -24,16 +24,45 @@ def focal_heatmap_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.
     return (per_map / num_pos * valid).sum() / valid.sum().clamp(min=1.0)
 
 
-def mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
-    """BCE + soft Dice on a coverage mask. ``logits``/``target`` (N, H, W), ``valid`` (N,)."""
+def mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor, overlap: str = "dice") -> torch.Tensor:
+    """BCE + an overlap loss on a coverage mask. ``logits``/``target`` (N, H, W), ``valid`` (N,).
+
+    ``overlap`` is ``dice`` (soft Dice) or ``lovasz`` (:func:`lovasz_hinge` against the target cut at
+    0.5): the evaluation scores each photo's mask by its IoU, which the Lovasz hinge bounds directly."""
     bce = F.binary_cross_entropy_with_logits(logits, target, reduction="none").mean(dim=(1, 2))
+    if overlap == "lovasz":
+        return ((bce + lovasz_hinge(logits, target > 0.5)) * valid).sum() / valid.sum().clamp(min=1.0)
+    if overlap != "dice":
+        raise ValueError(f"unknown overlap loss {overlap!r}: use 'dice' or 'lovasz'")
     prob = torch.sigmoid(logits)
     inter = (prob * target).sum(dim=(1, 2))
     dice = 1 - (2 * inter + 1) / (prob.sum(dim=(1, 2)) + target.sum(dim=(1, 2)) + 1)
     return ((bce + dice) * valid).sum() / valid.sum().clamp(min=1.0)
 
 
-def upsampled_mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor, factor: int) -> torch.Tensor:
+def lovasz_hinge(logits: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
+    """Per-image Lovasz hinge (Berman et al., CVPR 2018, Eq. 10-11): a convex surrogate of 1 - IoU of
+    the mask ``logits`` > 0 with the boolean ``labels``, both (N, H, W); returns (N,). The hinge
+    errors are sorted, and each is weighted by how much it adds to the Jaccard loss of the errors
+    before it, so a pixel costs what it costs the image's IoU. An image with no labelled pixel
+    costs its false positives' hinge errors weighted the same way (its IoU is 0 with any)."""
+    flat_logits, flat_labels = logits.flatten(1), labels.flatten(1).to(logits.dtype)
+    losses = []
+    for scores, truth in zip(flat_logits, flat_labels):
+        errors = 1.0 - scores * (2.0 * truth - 1.0)
+        errors_sorted, order = torch.sort(errors, descending=True)
+        truth_sorted = truth[order]
+        positives = truth_sorted.sum()
+        intersection = positives - truth_sorted.cumsum(0)
+        union = positives + (1.0 - truth_sorted).cumsum(0)
+        jaccard = 1.0 - intersection / union
+        grad = torch.cat([jaccard[:1], jaccard[1:] - jaccard[:-1]])
+        losses.append(torch.dot(F.relu(errors_sorted), grad))
+    return torch.stack(losses)
+
+
+def upsampled_mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor, factor: int,
+                        overlap: str = "dice") -> torch.Tensor:
     """:func:`mask_loss` where the mask is judged: ``logits`` (N, H, W) resized bilinearly ``factor``
     times (cell centres aligned, as ``needle_mask_at`` resizes them at evaluation) against the
     coverage ``target`` resized the same way and cut at 0.5, a binary mask. On a coverage target a
@@ -41,18 +70,19 @@ def upsampled_mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch
     cut at 0.5 then drops; here each pixel of the needle is taught "needle"."""
     up = F.interpolate(logits[:, None], scale_factor=factor, mode="bilinear", align_corners=False)[:, 0]
     binary = (F.interpolate(target[:, None], scale_factor=factor, mode="bilinear", align_corners=False)[:, 0] > 0.5)
-    return mask_loss(up, binary.to(up.dtype), valid)
+    return mask_loss(up, binary.to(up.dtype), valid, overlap)
 
 
 def crop_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor,
-              needle_upsample: int = 1) -> dict[str, torch.Tensor]:
+              needle_upsample: int = 1, needle_overlap: str = "dice") -> dict[str, torch.Tensor]:
     """Total crop-model loss: heatmap focal loss on channels 0..C-2, mask loss on the last channel
-    (on the coverage grid, or with ``needle_upsample`` > 1 by :func:`upsampled_mask_loss`)."""
+    (on the coverage grid, or with ``needle_upsample`` > 1 by :func:`upsampled_mask_loss`), with
+    ``needle_overlap`` as its overlap term (:func:`mask_loss`)."""
     heat = focal_heatmap_loss(logits[:, :-1], target[:, :-1], valid[:, :-1])
     if needle_upsample > 1:
-        needle = upsampled_mask_loss(logits[:, -1], target[:, -1], valid[:, -1], needle_upsample)
+        needle = upsampled_mask_loss(logits[:, -1], target[:, -1], valid[:, -1], needle_upsample, needle_overlap)
     else:
-        needle = mask_loss(logits[:, -1], target[:, -1], valid[:, -1])
+        needle = mask_loss(logits[:, -1], target[:, -1], valid[:, -1], needle_overlap)
     return {"loss": heat + needle, "heat": heat.detach(), "needle": needle.detach()}
 
 

@@ -147,9 +147,9 @@ def has_deep_needle_branch(init: Path) -> bool:
     return init_parts(init).branch == "up8"
 
 
-def _loss(model, batch, needle_upsample: int = 1):
+def _loss(model, batch, needle_upsample: int = 1, needle_overlap: str = "dice"):
     x, target, valid = batch
-    return crop_loss(model(x), target, valid, needle_upsample)
+    return crop_loss(model(x), target, valid, needle_upsample, needle_overlap)
 
 
 def validate_crop(model, synth_val, real_val, size: int, limit: int = 300) -> dict[str, float]:
@@ -260,6 +260,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--needle-loss-upsample", type=int, default=1, metavar="N",
                         help="judge the needle mask N times finer than the output grid, as a binary mask "
                              "(losses.upsampled_mask_loss); 1: on the coverage grid")
+    parser.add_argument("--needle-overlap-loss", choices=("dice", "lovasz"), default="dice",
+                        help="the needle mask's overlap loss beside BCE: soft Dice, or the Lovasz hinge, a surrogate "
+                             "of each mask's IoU (losses.lovasz_hinge), which is what the evaluation scores")
     parser.add_argument("--colour-swap", type=float, default=0.0, metavar="P",
                         help="shuffle each training image's colour channels with probability P (needle colours)")
     parser.add_argument("--notch-sigma-cells", type=float, metavar="S",
@@ -335,7 +338,8 @@ def main(argv: list[str] | None = None) -> int:
     sigmas = {name: args.notch_sigma_cells for name in NOTCH_CHANNELS} if args.notch_sigma_cells else None
     best = train(model, make_batches(shards, args.size, args.batch, args.seed, weights, args.needle_dilate_px,
                                     args.colour_swap, sigmas, train_channels(model.aux_heatmaps)), steps,
-                 functools.partial(_loss, needle_upsample=args.needle_loss_upsample),
+                 functools.partial(_loss, needle_upsample=args.needle_loss_upsample,
+                                   needle_overlap=args.needle_overlap_loss),
                  lambda m: validate_crop(m, synth_val, real_val, args.size),
                  TrainSettings(epochs=args.epochs, lr=args.lr), args.run)
     log.info("best: %s (%.0f min)", json.dumps(best), (time.monotonic() - started) / 60)
@@ -347,6 +351,7 @@ def main(argv: list[str] | None = None) -> int:
                                                     "init": str(args.init) if args.init else ("scratch" if args.scratch else "imagenet"),
                                                     "needle_dilate_px": args.needle_dilate_px,
                                                     "needle_loss_upsample": args.needle_loss_upsample,
+                                                    "needle_overlap_loss": args.needle_overlap_loss,
                                                     "colour_swap": args.colour_swap,
                                                     "notch_sigma_cells": args.notch_sigma_cells or SIGMA_CELLS,
                                                     "keypoint_decoder": args.keypoint_decoder,

@@ -1,4 +1,4 @@
-"""The needle loss judged where the evaluation judges it (losses.upsampled_mask_loss)."""
+"""The needle loss judged where the evaluation judges it (losses.upsampled_mask_loss), and its overlap terms."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
 
 from gauged.evaluation.model_metrics import needle_mask_at  # noqa: E402
-from gauged.training.losses import crop_loss, mask_loss, upsampled_mask_loss  # noqa: E402
+from gauged.training.losses import crop_loss, lovasz_hinge, mask_loss, upsampled_mask_loss  # noqa: E402
 from gauged.training.targets import downsample_mask  # noqa: E402
 
 
@@ -49,3 +49,35 @@ def test_crop_loss_uses_the_upsampled_needle_loss_only_when_asked():
     assert torch.isclose(plain["heat"], judged["heat"])
     assert torch.isclose(plain["needle"], mask_loss(logits[:, -1], target[:, -1], valid[:, -1]))
     assert torch.isclose(judged["needle"], upsampled_mask_loss(logits[:, -1], target[:, -1], valid[:, -1], 2))
+
+
+def test_the_lovasz_hinge_of_a_decided_mask_is_twice_its_jaccard_loss():
+    # With logits of +-1 every right pixel has hinge error 0 and every wrong one 2, and the Lovasz
+    # extension of that error vector is 2 * (1 - IoU) of the mask the logits cut (Berman et al.).
+    truth = torch.from_numpy(thin_needle().astype(bool))[None]
+    predicted = truth.clone()
+    predicted[0, 28:36, 40:60] = True  # a blob beside the needle's far end
+    predicted[0, 30:36, 10:20] = False  # the hub end missed
+    logits = predicted.float() * 2 - 1
+    iou = (predicted & truth).sum() / (predicted | truth).sum()
+    assert torch.isclose(lovasz_hinge(logits, truth)[0], 2 * (1 - iou))
+
+
+def test_the_lovasz_hinge_is_zero_for_a_mask_right_with_margin_and_grows_with_the_error():
+    truth = torch.from_numpy(thin_needle().astype(bool))[None]
+    right = (truth.float() * 2 - 1) * 3
+    assert lovasz_hinge(right, truth)[0] == 0
+    thicker = torch.from_numpy(cv2.dilate(thin_needle(), np.ones((3, 3), np.uint8)).astype(bool))[None]
+    thickest = torch.from_numpy(cv2.dilate(thin_needle(), np.ones((5, 5), np.uint8)).astype(bool))[None]
+    assert 0 < lovasz_hinge(thicker.float() * 2 - 1, truth)[0] < lovasz_hinge(thickest.float() * 2 - 1, truth)[0]
+
+
+def test_the_mask_loss_takes_the_overlap_term_asked_for_and_refuses_an_unknown_one():
+    target = torch.from_numpy(thin_needle().astype(np.float32))[None]
+    logits = torch.zeros_like(target)
+    valid = torch.ones(1)
+    bce = torch.nn.functional.binary_cross_entropy_with_logits(logits, target)
+    assert torch.isclose(mask_loss(logits, target, valid, "lovasz"), bce + lovasz_hinge(logits, target > 0.5)[0])
+    assert not torch.isclose(mask_loss(logits, target, valid, "lovasz"), mask_loss(logits, target, valid))
+    with pytest.raises(ValueError, match="unknown overlap loss 'iou'"):
+        mask_loss(logits, target, valid, "iou")
