@@ -82,7 +82,7 @@ def train(model: nn.Module, batches: Callable[[int], Iterable[Batch]], steps_per
                 sums[key] = sums.get(key, 0.0) + float(value.detach())
             if step % settings.log_every == 0:
                 log.info("epoch %d/%d step %d/%d loss %.4f (%.0f s)", epoch + 1, settings.epochs, step,
-                         steps_per_epoch, float(losses["loss"]), time.monotonic() - started)
+                         steps_per_epoch, float(losses["loss"].detach()), time.monotonic() - started)
         model.eval()
         with torch.no_grad():
             metrics = validate(model)
