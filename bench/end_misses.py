@@ -31,25 +31,28 @@ from gauged.training.shards import open_crop_shard  # noqa: E402
 CAPTURED_STEPS = (0.5, 1.0, 1.5, 2.0, 3.0)
 
 
-def end_errors(model: OnnxModel, shard_dir: Path) -> tuple[np.ndarray, np.ndarray]:
+def end_errors(model: OnnxModel, shard_dir: Path, threshold: float) -> tuple[np.ndarray, np.ndarray, int]:
     """Per labelled end of every crop: the share of its resolution the crop was captured at, and the
-    distance (crop px) from the label to the model's best peak of that kind (inf: no peak)."""
+    distance (crop px) from the label to the model's best peak of that kind above ``threshold`` (inf:
+    no peak); and how many peaks were found for ends the crop does not show (false ends)."""
     shard = open_crop_shard(shard_dir)
-    scales, errors = [], []
+    scales, errors, false_ends = [], [], 0
     for index in range(len(shard)):
         sample = shard.sample(index)
         if sample.image.shape[0] != model.input_size:
             raise SystemExit(f"{shard_dir} holds {sample.image.shape[0]} px crops; the model takes {model.input_size}")
         captured = render_scale(sample.source, sample.image.shape[0])
-        keypoints = decode_crop_maps(model(to_model_input(sample.image)), model.input_size, require_notches=False)
+        keypoints = decode_crop_maps(model(to_model_input(sample.image)), model.input_size, threshold,
+                                     require_notches=False)
         for name in ("start", "end"):
             truth = sample.points.get(name)
-            if not truth:
-                continue
             peaks = getattr(keypoints, name)
+            if not truth:
+                false_ends += len(peaks) > 0
+                continue
             scales.append(1.0 if captured is None else captured)
             errors.append(float(np.linalg.norm(peaks.points[0] - truth[0])) if len(peaks) else np.inf)
-    return np.asarray(scales), np.asarray(errors)
+    return np.asarray(scales), np.asarray(errors), false_ends
 
 
 def report(scales: np.ndarray, errors: np.ndarray, tol: float) -> None:
@@ -69,14 +72,17 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--shard", type=Path, required=True, help="crop shard of the synthetic engine")
     parser.add_argument("--model", type=Path, default=Path("gauged/models/crop.onnx"))
+    parser.add_argument("--threshold", type=float, default=0.3,
+                        help="peak threshold of the start and end maps (default 0.3, the reader's)")
     args = parser.parse_args()
     if not (args.shard / "labels.jsonl").is_file():
         parser.error(f"{args.shard} is not a crop shard (no labels.jsonl); make one with gauged.training.prerender crops")
     header("how far the start and end notches are from their labels")
     model = OnnxModel(args.model, threads=2)
     tol = 4.0 * model.input_size / 448
-    scales, errors = end_errors(model, args.shard)
-    print(f"# {args.shard}: crops at {model.input_size} px, tolerance {tol:.2f} px (4 px at 448)")
+    scales, errors, false_ends = end_errors(model, args.shard, args.threshold)
+    print(f"# {args.shard}: crops at {model.input_size} px, tolerance {tol:.2f} px (4 px at 448), "
+          f"peak threshold {args.threshold:g}; a start or end peak where the crop shows no end: {false_ends}")
     for group, chosen in (("all", np.ones(len(scales), bool)), ("full size", scales == 1.0), ("upsampled", scales < 1.0)):
         if chosen.any():
             print(group)
