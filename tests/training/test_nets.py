@@ -59,3 +59,23 @@ def test_auxiliary_heatmaps_sit_before_the_needle_row_and_are_dropped_at_export(
     maps = session.run(None, {"image": _probe()[:1].numpy()})[0]
     assert maps.shape == (1, len(CROP_CHANNELS), SIZE // 2, SIZE // 2)
     np.testing.assert_allclose(maps, shipped[:1].numpy(), atol=1e-4)
+
+
+@pytest.mark.parametrize("variant", ["lite0", "lite1", "lite2"])
+def test_each_encoder_taps_its_declared_channels_at_strides_2_to_16_and_the_crop_net_runs_on_it(variant: str) -> None:
+    from gauged.training.nets import ENCODERS, Encoder
+
+    encoder = Encoder(SIZE, pretrained=False, variant=variant).eval()
+    with torch.no_grad():
+        features = encoder(_probe())
+    _, channels = ENCODERS[variant]
+    assert {stride: tuple(f.shape[1:]) for stride, f in features.items()} == {
+        stride: (channels[stride], SIZE // stride, SIZE // stride) for stride in (2, 4, 8, 16)}
+    model = CropNet(SIZE, pretrained=False, width=16, encoder=variant).eval()
+    with torch.no_grad():
+        assert model(_probe()).shape == (2, len(CROP_CHANNELS), SIZE // 2, SIZE // 2)
+
+
+def test_an_unknown_encoder_is_refused_by_name() -> None:
+    with pytest.raises(ValueError, match="unknown encoder 'lite9'"):
+        CropNet(SIZE, pretrained=False, encoder="lite9")
