@@ -26,8 +26,10 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gauged.evaluation.model_metrics import mask_iou, needle_mask_at  # noqa: E402
+from gauged.evaluation.models import whole_photo_needle_logits  # noqa: E402
 from gauged.reader.onnx_model import OnnxModel, to_model_input  # noqa: E402
 from gauged.training.real_data import load_needle_split, photo_group  # noqa: E402
+from gauged.training.targets import downsample_mask  # noqa: E402
 
 
 def one_per_photo(samples, every: int):
@@ -42,17 +44,20 @@ def one_per_photo(samples, every: int):
 
 
 def needle_logits(model: OnnxModel, image: np.ndarray, flip: bool) -> np.ndarray:
+    """The needle logits of the photo given whole, as ``gauged eval models`` gives it; with ``flip``, of
+    its model input mirrored left to right, mirrored back."""
+    if not flip:
+        return whole_photo_needle_logits(model, image)
     size = model.input_size
     x = cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)
-    if flip:
-        return model(to_model_input(np.ascontiguousarray(x[:, ::-1])))[-1][:, ::-1]
-    return model(to_model_input(x))[-1]
+    return model(to_model_input(np.ascontiguousarray(x[:, ::-1])))[-1][:, ::-1]
 
 
 def grid_iou(mask: np.ndarray, size: int, stride: int) -> float:
+    """IoU of the label through the output grid: drawn at the model's input, averaged to the grid as the
+    training targets are (``downsample_mask``), resized back and cut as the evaluation cuts."""
     truth = (mask > 0).astype(np.float32)
-    coverage = cv2.resize(cv2.resize(truth, (size, size), interpolation=cv2.INTER_AREA),
-                          (size // stride, size // stride), interpolation=cv2.INTER_AREA)
+    coverage = downsample_mask(cv2.resize(truth, (size, size), interpolation=cv2.INTER_AREA), stride)
     return mask_iou(needle_mask_at(coverage - 0.5, mask.shape), truth > 0)
 
 

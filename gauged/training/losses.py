@@ -47,18 +47,15 @@ def lovasz_hinge(logits: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
     before it, so a pixel costs what it costs the image's IoU. An image with no labelled pixel
     costs its false positives' hinge errors weighted the same way (its IoU is 0 with any)."""
     flat_logits, flat_labels = logits.flatten(1), labels.flatten(1).to(logits.dtype)
-    losses = []
-    for scores, truth in zip(flat_logits, flat_labels):
-        errors = 1.0 - scores * (2.0 * truth - 1.0)
-        errors_sorted, order = torch.sort(errors, descending=True)
-        truth_sorted = truth[order]
-        positives = truth_sorted.sum()
-        intersection = positives - truth_sorted.cumsum(0)
-        union = positives + (1.0 - truth_sorted).cumsum(0)
-        jaccard = 1.0 - intersection / union
-        grad = torch.cat([jaccard[:1], jaccard[1:] - jaccard[:-1]])
-        losses.append(torch.dot(F.relu(errors_sorted), grad))
-    return torch.stack(losses)
+    errors = 1.0 - flat_logits * (2.0 * flat_labels - 1.0)
+    errors_sorted, order = torch.sort(errors, dim=1, descending=True)
+    truth_sorted = torch.gather(flat_labels, 1, order)
+    positives = truth_sorted.sum(dim=1, keepdim=True)
+    intersection = positives - truth_sorted.cumsum(1)
+    union = positives + (1.0 - truth_sorted).cumsum(1)
+    jaccard = 1.0 - intersection / union
+    grad = torch.cat([jaccard[:, :1], jaccard[:, 1:] - jaccard[:, :-1]], dim=1)
+    return (F.relu(errors_sorted) * grad).sum(dim=1)
 
 
 def upsampled_mask_loss(logits: torch.Tensor, target: torch.Tensor, valid: torch.Tensor, factor: int,

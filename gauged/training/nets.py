@@ -31,7 +31,6 @@ ENCODERS = {
     "lite1": ({2: 0, 4: 3, 8: 6, 16: 14}, {2: 16, 4: 24, 8: 40, 16: 112}),
     "lite2": ({2: 0, 4: 3, 8: 6, 16: 14}, {2: 16, 4: 24, 8: 48, 16: 120}),
 }
-_TAP_CHANNELS = ENCODERS["lite0"][1]  # the detector's; stride 2 has 16 channels in every variant (the refiner's)
 
 
 def _lite(variant: str, image_size: int, pretrained: bool) -> nn.Module:
@@ -169,7 +168,7 @@ class CropNet(nn.Module):
         it did before; training can only move the mask's outline from there."""
         if self.needle_branch is None:
             raise ValueError("refine_needle_branch needs a needle branch: call add_needle_branch first")
-        self.needle_branch.refiner = NeedleRefiner(self.needle_branch.head[0][1].out_channels, width)
+        self.needle_branch.refiner = NeedleRefiner(self.needle_branch.head[0][1].out_channels, self.encoder.channels[2], width)
         self._freeze(*self.frozen)
 
     def unfreeze(self) -> None:
@@ -246,10 +245,10 @@ class NeedleRefiner(nn.Module):
     3-5 px wide loses a third of its IoU to a pixel each side (bench/needle_errors.py); the decoder
     sees the image only through the encoder's features, the refiner sees its pixels."""
 
-    def __init__(self, branch_channels: int, width: int = 32):
+    def __init__(self, branch_channels: int, f2_channels: int, width: int = 32):
         super().__init__()
         self.pixels = nn.Conv2d(3, 12, 2, stride=2)
-        self.body = nn.Sequential(_sep_conv(branch_channels + _TAP_CHANNELS[2] + 12 + 1, width),
+        self.body = nn.Sequential(_sep_conv(branch_channels + f2_channels + 12 + 1, width),
                                   _sep_conv(width, width), _sep_conv(width, width))
         self.out = nn.Conv2d(width, 1, 1)
         nn.init.zeros_(self.out.weight)
@@ -269,7 +268,7 @@ class DetNet(nn.Module):
     def __init__(self, image_size: int = 384, pretrained: bool = True, width: int = 64):
         super().__init__()
         self.encoder = Encoder(image_size, pretrained)
-        self.up8 = _UpBlock(_TAP_CHANNELS[16], _TAP_CHANNELS[8], width)
+        self.up8 = _UpBlock(self.encoder.channels[16], self.encoder.channels[8], width)
         self.center = nn.Sequential(_sep_conv(width, width), nn.Conv2d(width, 1, 1))
         self.regress = nn.Sequential(_sep_conv(width, width), nn.Conv2d(width, 4, 1))
         nn.init.constant_(self.center[-1].bias, -4.0)
