@@ -1,8 +1,8 @@
 """``gauged synth``: render synthetic gauges with complete ground truth.
 
-    gauged synth images --count N --seed S --out DIR [--kind scene|crop] [--masks] [--workers W]
-    gauged synth recording --seconds T --fps F --gauges K --seed S --out FILE.mcap [--ros2]
-    gauged synth sheet --out sheet.png [--seed S]
+    gauged synth images --count N --seed S --out DIR [--kind scene|crop] [--masks] [--workers W] [--direction D]
+    gauged synth recording --seconds T --fps F --gauges K --seed S --out FILE.mcap [--ros2] [--direction D]
+    gauged synth sheet --out sheet.png [--seed S] [--direction D]
     gauged synth demo --out recordings/demo.mcap [--ros2]
     gauged synth plant-demo --out recordings/plant-demo.mcap [--ros2-out FILE.mcap]
 
@@ -42,6 +42,16 @@ def _quality(text: str) -> int:
     return value
 
 
+DIRECTIONS = ("cw", "ccw", "mixed")  # gauged.synth.sampling.DIRECTIONS, not imported so the CLI starts fast
+DIRECTION_HELP = ("which way the printed values rise: cw = clockwise (default; a seed renders what it always did), "
+                  "ccw = counter-clockwise, min at the clockwise-last end (vacuum, compound, negative and decimal "
+                  "ranges, e.g. 0..30 inHg, -1..0 bar, -0.1..0 MPa), mixed = each gauge ccw with probability 0.3")
+
+
+def _direction(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--direction", choices=DIRECTIONS, default="cw", help=DIRECTION_HELP)
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "synth", help="render synthetic gauges, recordings and contact sheets with ground truth",
@@ -63,6 +73,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     images.add_argument("--clean", action="store_true", help="no glass, shadows, blur, noise or compression")
     images.add_argument("--quality", type=_quality, default=95, help="JPEG quality of the written files")
     images.add_argument("--workers", type=_positive_int, default=1, help="worker processes")
+    _direction(images)
 
     rec = sub.add_parser("recording", help="write a moving scene as an MCAP recording",
                          description="Render one camera looking at K gauges whose values move, as MCAP "
@@ -77,6 +88,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rec.add_argument("--width", type=_positive_int, default=960, help="frame width in px")
     rec.add_argument("--height", type=_positive_int, default=540, help="frame height in px")
     rec.add_argument("--quality", type=_quality, default=80, help="JPEG quality of the frames")
+    _direction(rec)
 
     sheet = sub.add_parser("sheet", help="write a contact sheet of 48 random renders",
                            description="Write a PNG grid of random renders (crops, every sixth a full scene).")
@@ -85,6 +97,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sheet.add_argument("--count", type=_positive_int, default=48, help="number of tiles")
     sheet.add_argument("--tile", type=_positive_int, default=256, help="tile side in px")
     sheet.add_argument("--workers", type=_positive_int, default=1, help="worker processes")
+    _direction(sheet)
 
     demo = sub.add_parser("demo", help="rebuild the bundled demo recording (four moving dials, one camera)",
                           description="Rebuild recordings/demo.mcap byte for byte (gauged.synth.moving_dials; "
@@ -115,7 +128,8 @@ def _images(args: argparse.Namespace) -> int:
         log.error("--out %s exists and is not a directory", args.out)
         return 2
     labels = write_images(args.out, args.kind, args.seed, args.count, width=args.width, height=args.height,
-                          size=args.size, clean=args.clean, workers=args.workers, quality=args.quality, masks=args.masks)
+                          size=args.size, clean=args.clean, workers=args.workers, quality=args.quality, masks=args.masks,
+                          direction=args.direction)
     print(f"wrote {args.count} {args.kind} images and {labels}")
     return 0
 
@@ -127,9 +141,11 @@ def _recording(args: argparse.Namespace) -> int:
     if not _parent_ok(args.out):
         return 2
     seq = random_sequence(np.random.default_rng(args.seed), camera=args.camera, seconds=args.seconds, fps=args.fps,
-                          gauges=args.gauges, width=args.width, height=args.height)
+                          gauges=args.gauges, width=args.width, height=args.height, direction=args.direction)
     meta = {"command": "gauged synth recording", "seed": str(args.seed), "seconds": f"{args.seconds:g}",
             "fps": f"{args.fps:g}", "gauges": str(args.gauges)}
+    if args.direction != "cw":  # a cw recording keeps the metadata, and so the bytes, it always had
+        meta["direction"] = args.direction
     write = write_ros2 if args.ros2 else write_foxglove
     summary = write(args.out, [seq], quality=args.quality, metadata=meta)
     print(f"wrote {summary.frames} frames of {args.camera} to {summary.path} ({summary.bytes} bytes)")
@@ -141,7 +157,7 @@ def _sheet(args: argparse.Namespace) -> int:
 
     if not _parent_ok(args.out):
         return 2
-    img = contact_sheet(args.seed, args.count, args.tile, workers=args.workers)
+    img = contact_sheet(args.seed, args.count, args.tile, workers=args.workers, direction=args.direction)
     if not cv2.imwrite(str(args.out), img):
         log.error("could not write %s (unknown image extension?)", args.out)
         return 2

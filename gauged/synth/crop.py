@@ -61,12 +61,14 @@ def frame_gauge(pose: Pose, params: GaugeParams, size: float, fill: float, centr
                    focal_px=pose.focal_px * k)
 
 
-def sample_crop_spec(rng: np.random.Generator, size: int = 448, *, clean: bool = False) -> tuple[SceneSpec, float]:
-    """A one-gauge scene for a crop, and the upsampling factor to reach ``size``."""
+def sample_crop_spec(rng: np.random.Generator, size: int = 448, *, clean: bool = False,
+                     direction: str = "cw") -> tuple[SceneSpec, float]:
+    """A one-gauge scene for a crop, and the upsampling factor to reach ``size``; ``direction`` is
+    :func:`~gauged.synth.sampling.sample_gauge`'s (for the neighbour too)."""
     render = size
     if not clean and rng.random() < 0.33:
         render = max(24, int(round(size * rng.uniform(0.12, 0.6))))
-    params = sample_gauge(rng, clean=clean)
+    params = sample_gauge(rng, clean=clean, direction=direction)
     pose = sample_pose(rng, (0.0, 0.0), 100.0, 100.0 * rng.uniform(1.5, 10.0))
     fill = rng.uniform(0.55, 0.98)
     jitter = rng.uniform(-0.06, 0.06, 2) * render if not clean else np.zeros(2)
@@ -79,21 +81,24 @@ def sample_crop_spec(rng: np.random.Generator, size: int = 448, *, clean: bool =
         d = pose.diameter_px * rng.uniform(0.5, 1.2)
         dist = render * 0.5 + d * rng.uniform(0.1, 0.45)
         centre = (render / 2 + dist * math.cos(a), render / 2 + dist * math.sin(a))
-        placements.append(GaugePlacement(sample_gauge(rng), sample_pose(rng, centre, d, pose.focal_px), "g1"))
+        placements.append(GaugePlacement(sample_gauge(rng, direction=direction), sample_pose(rng, centre, d, pose.focal_px),
+                                         "g1"))
     spec = SceneSpec(render, render, background_kind(rng), int(rng.integers(2**31)), tuple(placements),
                      sample_camera(rng, clean=clean, scale=render / 448), 0 if clean else int(rng.random() < 0.2),
                      int(rng.integers(2**31)), int(rng.integers(2**31)))
     return spec, size / render
 
 
-def render_crop(rng: np.random.Generator | int, size: int = 448, *, clean: bool = False, masks: bool = True) -> CropSample:
+def render_crop(rng: np.random.Generator | int, size: int = 448, *, clean: bool = False, masks: bool = True,
+                direction: str = "cw") -> CropSample:
     """Render one square crop of a random gauge (deterministic for a seed or a Generator state).
 
     ``clean=True`` gives a sharp, frontal-ish render with no glass, shadow, noise or compression
-    (for tests and curricula); ``masks`` adds the needle label map.
+    (for tests and curricula); ``masks`` adds the needle label map; ``direction`` ("cw", "ccw",
+    "mixed") is which way the scale rises.
     """
     gen = as_generator(rng)
-    spec, scale = sample_crop_spec(gen, size, clean=clean)
+    spec, scale = sample_crop_spec(gen, size, clean=clean, direction=direction)
     result = render_frame(spec, output_scale=scale, masks=masks)
     return CropSample(result.image, result.truths[0].to_dict(), result.needle_masks[0] if masks else None,
                       spec.gauges[0].params, spec, scale)

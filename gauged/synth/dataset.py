@@ -28,15 +28,20 @@ def sample_rng(seed: int, index: int) -> np.random.Generator:
     return np.random.default_rng([seed, index])
 
 
-def render_item(args: tuple[str, int, int, int, int, int, bool]) -> tuple[np.ndarray, dict, np.ndarray | None]:
-    """Render sample ``index``: (image, record, needle mask or None). Top-level so workers can run it."""
-    kind, seed, index, width, height, size, clean = args
+def render_item(args: tuple) -> tuple[np.ndarray, dict, np.ndarray | None]:
+    """Render sample ``index``: (image, record, needle mask or None). Top-level so workers can run it.
+
+    ``args`` is ``(kind, seed, index, width, height, size, clean)`` or the same with a scale
+    ``direction`` ("cw", "ccw", "mixed") appended; without it the scales rise clockwise.
+    """
+    kind, seed, index, width, height, size, clean = args[:7]
+    direction = args[7] if len(args) > 7 else "cw"
     rng = sample_rng(seed, index)
     if kind == "crop":
-        crop = render_crop(rng, size, clean=clean)
+        crop = render_crop(rng, size, clean=clean, direction=direction)
         record = image_record([], size, size, render_scale=1.0 / crop.output_scale)
         return crop.image, record | {"gauges": [crop.truth]}, crop.needle_mask
-    scene = render_scene(rng, width, height, clean=clean)
+    scene = render_scene(rng, width, height, clean=clean, direction=direction)
     return scene.image, scene.record, None
 
 
@@ -50,9 +55,10 @@ def _init_worker() -> None:
 
 
 def render_batch(kind: str, seed: int, count: int, *, width: int = 1280, height: int = 720, size: int = 448,
-                 clean: bool = False, workers: int = 1) -> Iterator[tuple[int, np.ndarray, dict, np.ndarray | None]]:
+                 clean: bool = False, workers: int = 1,
+                 direction: str = "cw") -> Iterator[tuple[int, np.ndarray, dict, np.ndarray | None]]:
     """Yield ``(index, image, record, mask)`` for ``count`` samples, in index order."""
-    jobs = [(kind, seed, i, width, height, size, clean) for i in range(count)]
+    jobs = [(kind, seed, i, width, height, size, clean, direction) for i in range(count)]
     if workers <= 1:
         for i, job in enumerate(jobs):
             yield (i, *render_item(job))
@@ -63,9 +69,11 @@ def render_batch(kind: str, seed: int, count: int, *, width: int = 1280, height:
 
 
 def write_images(out: Path, kind: str, seed: int, count: int, *, width: int = 1280, height: int = 720, size: int = 448,
-                 clean: bool = False, workers: int = 1, quality: int = 95, masks: bool = False) -> Path:
+                 clean: bool = False, workers: int = 1, quality: int = 95, masks: bool = False,
+                 direction: str = "cw") -> Path:
     """Write ``count`` renders as ``out/NNNNNN.jpg`` plus ``out/labels.jsonl`` (and ``out/masks/NNNNNN.png``
-    needle label maps for crops when ``masks``); returns the labels path."""
+    needle label maps for crops when ``masks``); returns the labels path. ``direction`` ("cw",
+    "ccw", "mixed") is which way the scales rise."""
     out.mkdir(parents=True, exist_ok=True)
     if masks:
         (out / "masks").mkdir(exist_ok=True)
@@ -73,7 +81,7 @@ def write_images(out: Path, kind: str, seed: int, count: int, *, width: int = 12
     step = max(1, count // 20)
     with labels.open("w", encoding="utf-8") as f:
         for i, image, record, mask in render_batch(kind, seed, count, width=width, height=height, size=size,
-                                                   clean=clean, workers=workers):
+                                                   clean=clean, workers=workers, direction=direction):
             name = f"{i:06d}.jpg"
             cv2.imwrite(str(out / name), image, [cv2.IMWRITE_JPEG_QUALITY, quality])
             if masks and mask is not None:
@@ -85,13 +93,15 @@ def write_images(out: Path, kind: str, seed: int, count: int, *, width: int = 12
     return labels
 
 
-def contact_sheet(seed: int, count: int = 48, tile: int = 256, columns: int = 8, workers: int = 1) -> np.ndarray:
+def contact_sheet(seed: int, count: int = 48, tile: int = 256, columns: int = 8, workers: int = 1,
+                  direction: str = "cw") -> np.ndarray:
     """A grid of ``count`` renders: mostly crops, every sixth a full scene letterboxed into its tile."""
     tiles = []
     scene_every = 6
     jobs_crop = [i for i in range(count) if i % scene_every != scene_every - 1]
-    crops = {i: img for i, img, _, _ in _subset("crop", seed, jobs_crop, tile, workers)}
-    scenes = {i: img for i, img, _, _ in _subset("scene", seed, [i for i in range(count) if i not in crops], tile, workers)}
+    crops = {i: img for i, img, _, _ in _subset("crop", seed, jobs_crop, tile, workers, direction)}
+    scenes = {i: img for i, img, _, _ in _subset("scene", seed, [i for i in range(count) if i not in crops], tile,
+                                                 workers, direction)}
     for i in range(count):
         img = crops.get(i)
         if img is None:
@@ -110,8 +120,9 @@ def contact_sheet(seed: int, count: int = 48, tile: int = 256, columns: int = 8,
     return sheet
 
 
-def _subset(kind: str, seed: int, indices: list[int], tile: int, workers: int) -> Iterator[tuple[int, np.ndarray, dict, None]]:
-    jobs = [(kind, seed, i, 1280, 720, tile, False) for i in indices]
+def _subset(kind: str, seed: int, indices: list[int], tile: int, workers: int,
+            direction: str = "cw") -> Iterator[tuple[int, np.ndarray, dict, None]]:
+    jobs = [(kind, seed, i, 1280, 720, tile, False, direction) for i in indices]
     if workers <= 1 or len(jobs) < 2:
         results = [render_item(job) for job in jobs]
     else:

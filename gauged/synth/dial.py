@@ -139,7 +139,7 @@ def _draw_scale(img: np.ndarray, scale: ScaleParams, index: int, rf: float) -> l
         edge = tick_extent(scale, True)
         r = edge[1] if scale.tick_side == "in" else edge[0] if scale.tick_side == "out" else scale.radius
         hw = scale.baseline_width / 2.0
-        poly = draw.annular_sector((0, 0), r - hw, r + hw, scale.start_angle, scale.end_angle, step=0.01)
+        poly = draw.annular_sector((0, 0), r - hw, r + hw, *scale.arc, step=0.01)
         draw.fill_polygon(img, to_px(poly), scale.color)
     r0, r1 = tick_extent(scale, False)
     polys = [to_px(_tick_polygon(scale, scale.angle_of(v), r0, r1, scale.minor_width, scale.minor_style))

@@ -2,7 +2,10 @@
 
 Lengths are in *face units* (face radius = 1, pivot at the origin, ``x`` right, ``y`` down), angles
 are dial-frame image angles in radians (``atan2(dy, dx)`` with ``y`` down, so positive turns
-clockwise), colours are BGR tuples of 0-255 ints. :mod:`gauged.synth.sampling` draws these records
+clockwise), colours are BGR tuples of 0-255 ints. A scale's ``start_angle`` is always the angle of its
+minimum and ``end_angle`` that of its maximum, so a scale whose values rise counter-clockwise (a US
+vacuum gauge, 0 on the right and 30 inHg on the left) has ``end_angle < start_angle``.
+:mod:`gauged.synth.sampling` draws these records
 from a ``numpy.random.Generator``; rendering a record is deterministic.
 """
 
@@ -41,7 +44,7 @@ class ScaleParams:
     unit: str  # normalised: bar, mbar, kPa, MPa, psi, kg/cm2, inHg, degC, degF, %
     unit_text: str  # as printed, e.g. "kg/cm²"
     start_angle: float  # dial angle of ``min``
-    end_angle: float  # dial angle of ``max`` (> start_angle: scales run clockwise)
+    end_angle: float  # dial angle of ``max``: > start_angle when values rise clockwise, < when counter-clockwise
     radius: float  # major notch centres lie on this circle
     label_step: float
     major_step: float
@@ -72,6 +75,25 @@ class ScaleParams:
 
     def value_at(self, angle: float) -> float:
         return self.min + (angle - self.start_angle) / (self.end_angle - self.start_angle) * (self.max - self.min)
+
+    @property
+    def direction(self) -> str:
+        """``"cw"`` when values rise clockwise on the dial, ``"ccw"`` when they rise counter-clockwise."""
+        return "cw" if self.end_angle > self.start_angle else "ccw"
+
+    @property
+    def sweep(self) -> float:
+        """Angle between the ends of the scale, radians, positive in both directions."""
+        return abs(self.end_angle - self.start_angle)
+
+    @property
+    def arc(self) -> tuple[float, float]:
+        """The arc's ends in clockwise order: (clockwise-first, clockwise-last) dial angles."""
+        return (self.start_angle, self.end_angle) if self.direction == "cw" else (self.end_angle, self.start_angle)
+
+    def below_min(self, gap: float) -> float:
+        """Dial angle ``gap`` radians past the minimum's end, away from the scale (where a stop pin sits)."""
+        return self.start_angle - gap if self.direction == "cw" else self.start_angle + gap
 
 
 @dataclass(frozen=True, slots=True)
@@ -168,6 +190,11 @@ class GaugeParams:
     def needle_angle(self) -> float:
         """Dial angle of the needle."""
         return self.primary.angle_of(self.value)
+
+    @property
+    def rest_value(self) -> float:
+        """Value the needle shows resting on the stop pin, ``stop_gap`` below the primary scale's minimum."""
+        return self.primary.value_at(self.primary.below_min(self.stop_gap))
 
     def with_value(self, value: float, at_stop: bool = False) -> GaugeParams:
         """The same gauge with the needle at another value (used by sequences)."""

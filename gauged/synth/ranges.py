@@ -61,6 +61,24 @@ RANGES: tuple[RangeSpec, ...] = (
     RangeSpec(-30, 0, _d((5, 5, 1), (10, 5, 1)), ("inHg",)),
 )
 
+# Scales whose values rise counter-clockwise: vacuum, compound and low-range decimal scales as real
+# ones print them. Only counter-clockwise sampling draws from this list (``sample_gauge(direction=
+# "ccw" | "mixed")``), so the clockwise default draws what it always drew for a seed.
+CCW_RANGES: tuple[RangeSpec, ...] = (
+    RangeSpec(-1, 0, _d((0.2, 0.1, 0.02), (0.1, 0.1, 0.02), (0.2, 0.2, 0.05)), ("bar",)),
+    RangeSpec(-100, 0, _d((20, 10, 2), (10, 10, 2), (20, 20, 5)), ("kPa",)),
+    RangeSpec(0, 30, _d((5, 5, 1), (10, 5, 1), (5, 1, 0.5)), ("inHg",)),  # US vacuum: 0 on the right, 30 on the left
+    RangeSpec(-1, 3, _d((1, 0.5, 0.1), (1, 1, 0.1), (0.5, 0.5, 0.1)), ("bar",)),
+    RangeSpec(-1, 1.5, _d((0.5, 0.5, 0.1), (0.5, 0.25, 0.05)), ("bar",)),
+    RangeSpec(-30, 50, _d((10, 10, 2), (10, 10, 1), (20, 10, 2)), ("degC",)),
+    RangeSpec(-40, 40, _d((10, 10, 2), (20, 10, 2)), ("degC", "degF")),
+    RangeSpec(0, 1.6, _d((0.2, 0.2, 0.05), (0.4, 0.2, 0.05), (0.2, 0.1, 0.02)), ("bar", "MPa")),
+    RangeSpec(0, 2.5, _d((0.5, 0.5, 0.05), (0.5, 0.5, 0.1), (0.5, 0.25, 0.05)), ("MPa", "bar")),
+    RangeSpec(0, 0.6, _d((0.1, 0.1, 0.02), (0.2, 0.1, 0.02)), ("MPa", "bar")),
+    RangeSpec(-0.1, 0, _d((0.02, 0.01, 0.002), (0.02, 0.02, 0.005), (0.01, 0.01, 0.002)), ("MPa",)),
+    RangeSpec(-0.1, 0.15, _d((0.05, 0.05, 0.01), (0.05, 0.025, 0.005)), ("MPa",)),
+)
+
 # How each unit is printed (first variant most common).
 UNIT_TEXT: dict[str, tuple[str, ...]] = {
     "bar": ("bar", "BAR", "bar", "Bar"),

@@ -6,6 +6,13 @@ faces with black print, a fair share of black faces with white print, chrome and
 looks (quadrant scales, dual bar/psi scales, dots and wedges, coloured zones) so learned models do
 not over-fit the common case. ``clean=True`` turns off every nuisance (glass, grain, shadows) for
 ground-truth tests.
+
+Scales rise clockwise unless ``direction`` asks otherwise: ``"ccw"`` draws every gauge with values
+rising counter-clockwise (mostly from :data:`~gauged.synth.ranges.CCW_RANGES`: vacuum, compound,
+negative and decimal ranges), ``"mixed"`` a share :data:`CCW_SHARE` of them. A counter-clockwise
+gauge is drawn as a clockwise one and then mirrored about its arc's axis (:func:`reverse_direction`),
+so its layout is as plausible; the clockwise default draws exactly what it drew before directions
+existed (held-out sets are keyed on seeds).
 """
 
 from __future__ import annotations
@@ -18,7 +25,7 @@ import numpy as np
 from gauged.synth.fonts import FONT_KEYS
 from gauged.synth.params import (Band, BezelParams, Color, FaceParams, GaugeParams, GlassParams, NeedleParams,
                                  ScaleParams, TextItem, TextStyle)
-from gauged.synth.ranges import (RANGES, UNIT_TEXT, RangeSpec, convert, conversions_from, decimals_of, grid,
+from gauged.synth.ranges import (CCW_RANGES, RANGES, UNIT_TEXT, RangeSpec, convert, conversions_from, decimals_of, grid,
                                  nice_division)
 
 # (name, BGR colour, weight, dark)
@@ -35,6 +42,9 @@ INK_DARK: tuple[Color, ...] = ((238, 238, 238), (238, 238, 238), (170, 230, 245)
 SECONDARY_INK: tuple[Color, ...] = ((30, 30, 200), (150, 60, 20), (20, 110, 30))
 SECONDARY_INK_DARK: tuple[Color, ...] = ((60, 150, 250), (120, 220, 120), (250, 200, 130), (90, 90, 240))
 BANDS: dict[str, Color] = {"red": (40, 40, 210), "green": (60, 160, 40), "yellow": (40, 200, 230)}
+DIRECTIONS = ("cw", "ccw", "mixed")
+CCW_SHARE = 0.3  # of the gauges of direction "mixed"
+CCW_SPECIAL = 0.7  # of counter-clockwise gauges drawn from CCW_RANGES (the rest from RANGES)
 SWEEPS_DEG = (270, 270, 270, 270, 270, 240, 300, 180, 90, 330, 260, 280)
 _SYLLABLES = ("ma", "no", "ter", "wi", "ka", "zen", "tro", "flu", "dyn", "pre", "sa", "lo", "vik", "bar", "gau",
               "rex", "mes", "tec", "ron", "al", "hyd", "sto", "ven", "ox")
@@ -167,14 +177,14 @@ def sample_secondary_scale(rng: np.random.Generator, primary: ScaleParams, font:
     if radius < 0.38:
         return None
     decimals = decimals_of(div.label)
-    size = _fit_number_size(labels, decimals, radius * 0.75, a_max - a_min, rng.uniform(0.06, 0.11))
+    size = _fit_number_size(labels, decimals, radius * 0.75, abs(a_max - a_min), rng.uniform(0.06, 0.11))
     if size < 0.05:
         return None  # no room for legible numbers: real dials then print one scale only
     color = _choice(rng, SECONDARY_INK_DARK if dark else SECONDARY_INK) if rng.random() < 0.7 else primary.color
     return ScaleParams(
         role="secondary", min=s_min, max=s_max, unit=unit, unit_text=_choice(rng, UNIT_TEXT[unit]),
         start_angle=a_min, end_angle=a_max, radius=radius, label_step=div.label, major_step=div.major,
-        minor_step=_thin_minor(ticks, s_min, s_max, radius, a_max - a_min, div.major, div.minor), color=color,
+        minor_step=_thin_minor(ticks, s_min, s_max, radius, abs(a_max - a_min), div.major, div.minor), color=color,
         numbers=TextStyle(font, size, color), number_side="in",
         number_gap=rng.uniform(0.01, 0.03), number_orientation="upright", decimals=decimals, **ticks,
     )
@@ -286,9 +296,29 @@ def _replace_scale(s: ScaleParams, **kw) -> ScaleParams:
     return replace(s, **kw)
 
 
+def reverse_direction(params: GaugeParams) -> GaugeParams:
+    """The same gauge with every scale running the other way: dial angles are mirrored about the
+    axis of symmetry of the primary scale's arc, so the arc stays where it was, its minimum moves to
+    the other end, and the stop pin (just past the minimum) and secondary scales follow. The value
+    and everything printed off the scales stay; applying it twice gives the gauge back."""
+    axis = params.primary.start_angle + params.primary.end_angle  # twice the angle of the arc's middle
+    scales = tuple(replace(s, start_angle=axis - s.start_angle, end_angle=axis - s.end_angle) for s in params.scales)
+    pin = params.stop_pin
+    if pin is not None:
+        pin = (axis - pin[0], pin[1], pin[2])
+    return replace(params, scales=scales, stop_pin=pin)
+
+
 def sample_gauge(rng: np.random.Generator, *, clean: bool = False, range_spec: RangeSpec | None = None,
-                 unit: str | None = None, value: float | None = None, secondary: bool | None = None) -> GaugeParams:
-    """Draw one gauge. ``range_spec``/``unit``/``value``/``secondary`` pin those choices."""
+                 unit: str | None = None, value: float | None = None, secondary: bool | None = None,
+                 direction: str = "cw") -> GaugeParams:
+    """Draw one gauge. ``range_spec``/``unit``/``value``/``secondary`` pin those choices;
+    ``direction`` ("cw", "ccw" or "mixed", see the module docstring) which way its scales rise."""
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction must be one of {DIRECTIONS}, got {direction!r}")
+    ccw = direction == "ccw" or (direction == "mixed" and rng.random() < CCW_SHARE)  # "cw" draws nothing here
+    if ccw and range_spec is None and rng.random() < CCW_SPECIAL:
+        range_spec = _choice(rng, CCW_RANGES)
     name, face_color, _, dark = _choice(rng, FACES, [f[2] for f in FACES])
     ink = _choice(rng, INK_DARK if dark else INK_LIGHT)
     face = FaceParams(face_color, 0.0 if clean else rng.uniform(0.0, 0.2), 0.0 if clean else rng.uniform(0.0, 0.04), ink)
@@ -303,14 +333,14 @@ def sample_gauge(rng: np.random.Generator, *, clean: bool = False, range_spec: R
             scales.append(sec)
     free = number_ring_inner(scales[-1]) - 0.02
     centred = abs(((primary.start_angle + primary.end_angle) / 2 + math.pi / 2 + math.pi) % (2 * math.pi) - math.pi) < 0.1
-    scales, texts = _layout_texts(rng, scales, ink, free, centred and primary.end_angle - primary.start_angle <= math.radians(285))
+    scales, texts = _layout_texts(rng, scales, ink, free, centred and primary.sweep <= math.radians(285))
     needle = _sample_needle(rng, primary, dark, clean)
     stop_gap = rng.uniform(0.03, 0.1)
     at_stop = False
     if value is None:
         u = rng.random()
         if u < 0.08:
-            value, at_stop = primary.value_at(primary.start_angle - stop_gap), True
+            value, at_stop = primary.value_at(primary.start_angle - stop_gap), True  # still clockwise: mirrored below
         elif u < 0.13:
             value = primary.min
         elif u < 0.16:
@@ -336,7 +366,8 @@ def sample_gauge(rng: np.random.Generator, *, clean: bool = False, range_spec: R
                 sx = max(sx, abs(x) + 0.31 * size * len(text) + 0.05)
         if math.hypot(sx, sy) < free:
             screws = ((-sx, sy), (sx, sy))
-    return GaugeParams(face=face, bezel=_sample_bezel(rng), scales=tuple(scales), needle=needle,
-                       glass=_sample_glass(rng, clean), value=float(value), at_stop=at_stop, stop_pin=stop_pin,
-                       screws=screws, screw_radius=rng.uniform(0.02, 0.035), texts=texts,
-                       texture_seed=int(rng.integers(2**31)), stop_gap=stop_gap)
+    params = GaugeParams(face=face, bezel=_sample_bezel(rng), scales=tuple(scales), needle=needle,
+                         glass=_sample_glass(rng, clean), value=float(value), at_stop=at_stop, stop_pin=stop_pin,
+                         screws=screws, screw_radius=rng.uniform(0.02, 0.035), texts=texts,
+                         texture_seed=int(rng.integers(2**31)), stop_gap=stop_gap)
+    return reverse_direction(params) if ccw else params

@@ -290,8 +290,9 @@ def sample_pose(rng: np.random.Generator, center: tuple[float, float], diameter:
 
 
 def sample_scene(rng: np.random.Generator, width: int = 1280, height: int = 720, *, n_gauges: int | None = None,
-                 clean: bool = False) -> SceneSpec:
-    """A random scene of several gauges (0 to 6) with partial occlusion and a random camera."""
+                 clean: bool = False, direction: str = "cw") -> SceneSpec:
+    """A random scene of several gauges (0 to 6) with partial occlusion and a random camera;
+    ``direction`` is :func:`~gauged.synth.sampling.sample_gauge`'s, for every gauge."""
     if n_gauges is None:
         n_gauges = int(rng.choice(7, p=[0.03, 0.3, 0.25, 0.2, 0.11, 0.06, 0.05]))
     focal = width * rng.uniform(0.6, 2.5)
@@ -310,7 +311,7 @@ def sample_scene(rng: np.random.Generator, width: int = 1280, height: int = 720,
         else:
             continue
         circles.append((cx, cy, d / 2))
-        params = sample_gauge(rng, clean=clean)
+        params = sample_gauge(rng, clean=clean, direction=direction)
         pose = sample_pose(rng, (cx, cy), d, max(focal, 0.8 * d))
         gradient = (0.0, 0.0) if clean else tuple(float(g) for g in rng.normal(0, 0.15, 2))
         placements.append(GaugePlacement(params, pose, f"g{len(placements)}", 1.0 if clean else rng.uniform(0.7, 1.15),
@@ -331,9 +332,10 @@ class SceneSample:
 
 
 def render_scene(rng: np.random.Generator | int, width: int = 1280, height: int = 720, *, n_gauges: int | None = None,
-                 clean: bool = False) -> SceneSample:
-    """Render a random full frame with several gauges (deterministic for a seed or Generator state)."""
+                 clean: bool = False, direction: str = "cw") -> SceneSample:
+    """Render a random full frame with several gauges (deterministic for a seed or Generator state);
+    ``direction`` ("cw", "ccw", "mixed") is which way the gauges' scales rise."""
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    spec = sample_scene(gen, width, height, n_gauges=n_gauges, clean=clean)
+    spec = sample_scene(gen, width, height, n_gauges=n_gauges, clean=clean, direction=direction)
     result = render_frame(spec)
     return SceneSample(result.image, image_record(result.truths, width, height), spec)

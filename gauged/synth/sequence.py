@@ -67,7 +67,7 @@ def needle_state(params: GaugeParams, value: float) -> tuple[float, bool]:
     """What the needle shows for a true ``value``: below the stop pin it rests on the pin (the
     reading is then the pin's value and ``at_stop`` is set); above the end it stops 4 % past it."""
     scale = params.primary
-    rest = scale.value_at(scale.start_angle - params.stop_gap)
+    rest = params.rest_value
     top = scale.max + 0.04 * (scale.max - scale.min)
     if value <= rest:
         return rest, True
@@ -175,9 +175,10 @@ def without_compression(spec: SceneSpec) -> SceneSpec:
 
 
 def random_sequence(rng: np.random.Generator, *, camera: str = "cam1", seconds: float = 60.0, fps: float = 2.0,
-                    gauges: int = 3, width: int = 960, height: int = 540) -> CameraSequence:
-    """A random fixed-camera scene of ``gauges`` gauges whose values follow random timelines."""
-    spec = sample_scene(rng, width, height, n_gauges=gauges)
+                    gauges: int = 3, width: int = 960, height: int = 540, direction: str = "cw") -> CameraSequence:
+    """A random fixed-camera scene of ``gauges`` gauges whose values follow random timelines;
+    ``direction`` ("cw", "ccw", "mixed") is which way their scales rise."""
+    spec = sample_scene(rng, width, height, n_gauges=gauges, direction=direction)
     spec = replace(without_compression(spec), occluders=0)
     timelines = tuple((g.gauge_id, sample_timeline(rng, g.params.primary.min, g.params.primary.max, seconds))
                       for g in spec.gauges)

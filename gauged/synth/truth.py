@@ -46,14 +46,16 @@ Scale::
 
     {"role": "primary" | "secondary", "min": float, "max": float, "unit": str, "unit_text": str,
      "ellipse": Ellipse,               # image of the circle through the major notch centres
-     "start": [x, y], "end": [x, y],   # notch points of min and max
+     "start": [x, y], "end": [x, y],   # notch points of min and max (whatever the direction: on a
+                                       # counter-clockwise scale "start" is the clockwise-last end)
      "majors": [{"value": v, "point": [x, y], "labelled": bool, "visible": bool}, ...],   # every major notch
      "minors": [{"point": [x, y], "visible": bool}, ...],   # every minor notch (none when the style has none)
      "start_visible": bool, "end_visible": bool,
      "numbers": [Text, ...],           # every printed number, with "value"
      "unit_label": Text | null,
      "reading": float,                 # the needle's value on this scale
-     "sweep_deg": float}               # angle from min to max on the dial (frontal)
+     "sweep_deg": float,               # angle from min to max on the dial (frontal), positive
+     "direction": "cw" | "ccw"}        # which way values rise on the dial (the secondary follows the primary)
 
 Text::  {"text": str, "kind": str, "box": [x0, y0, x1, y1], "quad": [[x, y] x 4], "value": float | null}
         (quad corners in reading order: top-left, top-right, bottom-right, bottom-left)
@@ -170,7 +172,8 @@ def gauge_truth(params: GaugeParams, texts: tuple[PlacedText, ...], needle: Need
             "numbers": [_text_truth(t, h) for t in texts if t.kind == "number" and t.scale == i],
             "unit_label": _text_truth(unit_label[0], h) if unit_label else None,
             "reading": _value(s.value_at(angle)),
-            "sweep_deg": round(math.degrees(s.end_angle - s.start_angle), 4),
+            "sweep_deg": round(math.degrees(s.sweep), 4),
+            "direction": s.direction,
         })
     data = {
         "gauge": gauge_id,

@@ -17,6 +17,7 @@ import numpy as np
 from gauged.evaluation.gauge_crops import best_gauge_crop, crop_mask, shipped_detector
 from gauged.training.real_data import load_needle_split
 from gauged.training.shards import CropSample, DetectorSample, write_crop_shard, write_detector_shard
+from gauged.training.targets import arc_end_points
 
 log = logging.getLogger(__name__)
 
@@ -66,15 +67,11 @@ def synth_points(truth: dict) -> dict[str, list[list[float]] | None]:
     numbers = [[(n["box"][0] + n["box"][2]) / 2, (n["box"][1] + n["box"][3]) / 2]
                for s in scales for n in s.get("numbers", []) if n.get("kind") == "number"]
     needle = truth.get("needle") or {}
-
-    def end(name: str) -> list[list[float]] | None:
-        if not primary or not primary.get(name):
-            return None
-        return [primary[name]] if primary.get(f"{name}_visible", True) else []
+    ends = arc_end_points(primary) if primary else {"start": None, "end": None}  # geometric, either direction
 
     return {
-        "start": end("start"),
-        "end": end("end"),
+        "start": ends["start"],
+        "end": ends["end"],
         "major": majors if scales else None,
         "minor": minors if scales and all("minors" in s for s in scales) else None,
         "tip": [needle["tip"]] if needle.get("tip") else None,

@@ -45,6 +45,30 @@ def downsample_mask(mask: np.ndarray, stride: int) -> np.ndarray:
     return cv2.resize(mask.astype(np.float32), (width // stride, height // stride), interpolation=cv2.INTER_AREA)
 
 
+def arc_end_points(scale: Mapping) -> dict[str, list[list[float]] | None]:
+    """The crop model's ``start`` and ``end`` labels of one Scale record of :mod:`gauged.synth.truth`.
+
+    The channels are geometric, whichever way the printed values rise: ``start`` is the end of the
+    scale's arc from which it runs clockwise on screen (lower left on an ordinary dial), ``end`` the
+    clockwise-last end. The record's ``start``/``end`` are the notches of the minimum and maximum,
+    so on a scale of ``direction`` "ccw" they swap; records without ``direction`` are clockwise.
+    Each label is ``[point]``, ``[]`` when the record marks the notch hidden (labelled: none there),
+    or ``None`` when the record has no such point (not labelled).
+
+    >>> arc_end_points({"start": [10.0, 90.0], "end": [90.0, 90.0], "direction": "ccw", "start_visible": False})
+    {'start': [[90.0, 90.0]], 'end': []}
+    """
+    keys = ("end", "start") if scale.get("direction") == "ccw" else ("start", "end")
+    labels: dict[str, list[list[float]] | None] = {}
+    for channel, key in zip(("start", "end"), keys):
+        point = scale.get(key)
+        if not point:
+            labels[channel] = None
+        else:
+            labels[channel] = [point] if scale.get(f"{key}_visible", True) else []
+    return labels
+
+
 def crop_targets(points: dict[str, np.ndarray | None], needle_mask: np.ndarray | None, size: int,
                  channels: tuple[str, ...], stride: int = 2, sigma_cells: float = SIGMA_CELLS,
                  sigma_by_channel: Mapping[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:

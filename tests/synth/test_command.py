@@ -66,3 +66,19 @@ def test_images_same_files_with_two_workers(tmp_path):
         assert args.func(args) == 0
     assert (tmp_path / "one" / "labels.jsonl").read_bytes() == (tmp_path / "two" / "labels.jsonl").read_bytes()
     assert (tmp_path / "one" / "000002.jpg").read_bytes() == (tmp_path / "two" / "000002.jpg").read_bytes()
+
+
+def test_images_direction_sets_which_way_the_scales_rise(tmp_path):
+    directions = {}
+    for name in ("cw", "ccw", "mixed"):
+        argv = ["synth", "images", "--count", "6", "--seed", "2", "--kind", "crop", "--size", "96", "--out",
+                str(tmp_path / name)] + ([] if name == "cw" else ["--direction", name])
+        args = _parse(argv)
+        assert args.direction == name and args.func(args) == 0
+        records = [json.loads(line) for line in (tmp_path / name / "labels.jsonl").read_text().splitlines()]
+        directions[name] = {s["direction"] for r in records for g in r["gauges"] for s in g["scales"]}
+    assert directions["cw"] == {"cw"} and directions["ccw"] == {"ccw"}
+    with pytest.raises(SystemExit):
+        _parse(["synth", "images", "--count", "1", "--out", str(tmp_path), "--direction", "left"])
+    for sub in (["sheet", "--out", "s.png"], ["recording", "--out", "r.mcap"]):
+        assert _parse(["synth", *sub, "--direction", "ccw"]).direction == "ccw"

@@ -1,4 +1,5 @@
-"""The ground truth of renders lands on what is drawn: notches on ink, numbers on ink, needle angle."""
+"""The ground truth of renders lands on what is drawn: notches on ink, numbers on ink, needle angle
+(for scales rising either way)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from gauged.synth.projection import apply_homography, pose_homography, to_cv
 from gauged.synth.scene import render_frame
 
 SEEDS = range(12)
+DIRECTIONS = ("cw", "ccw")  # scales rising clockwise (the default) and counter-clockwise
 
 
 def _bilinear(img: np.ndarray, x: float, y: float) -> np.ndarray:
@@ -47,16 +49,18 @@ def _notches_on_ink(sample, kind: str) -> tuple[int, int]:
     return checked, on_ink
 
 
+@pytest.mark.parametrize("direction", DIRECTIONS)
 @pytest.mark.parametrize("seed", SEEDS)
-def test_truth_major_notches_land_on_ink(seed: int) -> None:
-    checked, on_ink = _notches_on_ink(render_crop(seed, size=512, clean=True), "majors")
+def test_truth_major_notches_land_on_ink(seed: int, direction: str) -> None:
+    checked, on_ink = _notches_on_ink(render_crop(seed, size=512, clean=True, direction=direction), "majors")
     assert checked >= 3
     assert on_ink / checked >= 0.95, f"{on_ink}/{checked} notch points on ink"
 
 
+@pytest.mark.parametrize("direction", DIRECTIONS)
 @pytest.mark.parametrize("seed", SEEDS)
-def test_truth_number_boxes_hold_their_ink(seed: int) -> None:
-    sample = render_crop(seed, size=512, clean=True)
+def test_truth_number_boxes_hold_their_ink(seed: int, direction: str) -> None:
+    sample = render_crop(seed, size=512, clean=True, direction=direction)
     face = np.asarray(sample.params.face.color, float)
     for scale_truth, scale in zip(sample.truth["scales"], sample.params.scales):
         ink = np.asarray(scale.numbers.color, float)
@@ -101,9 +105,10 @@ def _axis_angle(weight: np.ndarray, pivot: np.ndarray, direction: np.ndarray, mi
     return math.atan2(axis[1], axis[0])
 
 
+@pytest.mark.parametrize("direction", DIRECTIONS)
 @pytest.mark.parametrize("seed", range(16))
-def test_truth_reading_points_along_drawn_needle(seed: int) -> None:
-    sample = render_crop(seed, size=448, clean=True)
+def test_truth_reading_points_along_drawn_needle(seed: int, direction: str) -> None:
+    sample = render_crop(seed, size=448, clean=True, direction=direction)
     truth, params = sample.truth, sample.params
     pl = sample.spec.gauges[0]
     # the true reading converted back through the primary scale: its point on the scale circle
@@ -132,9 +137,10 @@ def test_truth_reading_points_along_drawn_needle(seed: int) -> None:
     assert error < 0.2, f"needle drawn at {math.degrees(fitted):.3f} deg on the dial, truth {math.degrees(angle):.3f}"
 
 
+@pytest.mark.parametrize("direction", DIRECTIONS)
 @pytest.mark.parametrize("seed", range(6))
-def test_truth_needle_mask_matches_drawn_needle(seed: int) -> None:
-    sample = render_crop(seed, size=448, clean=True)
+def test_truth_needle_mask_matches_drawn_needle(seed: int, direction: str) -> None:
+    sample = render_crop(seed, size=448, clean=True, direction=direction)
     drawn = _needle_pixels(sample) > 0.5
     mask = sample.needle_mask > 0
     # the hub is drawn in both renders but is not part of the mask: compare outside the hub only
@@ -203,9 +209,10 @@ def test_training_labels_keep_only_the_notches_the_image_shows() -> None:
     assert synth_points(old)["start"] == [primary["start"]]  # records from before visibility count as seen
 
 
+@pytest.mark.parametrize("direction", DIRECTIONS)
 @pytest.mark.parametrize("seed", SEEDS)
-def test_truth_minor_notches_land_on_ink(seed: int) -> None:
-    sample = render_crop(seed, size=512, clean=True)
+def test_truth_minor_notches_land_on_ink(seed: int, direction: str) -> None:
+    sample = render_crop(seed, size=512, clean=True, direction=direction)
     for scale_truth, scale in zip(sample.truth["scales"], sample.params.scales):
         if scale.minor_style == "none":
             assert scale_truth["minors"] == []
