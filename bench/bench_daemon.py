@@ -3,7 +3,7 @@
     python bench/bench_daemon.py [--runs 100] [--seconds 20] [--fps 15] [--threads 2] [--skip-stream]
 
 1. Locked cost: each gauge of the bundled demo (``recordings/demo.yaml``) is read frame after frame by
-   its :class:`~gauged.gauge_runner.GaugeRunner`, as in the daemon, until its scale locks; then
+   its :class:`~gauged.daemon.gauge_runner.GaugeRunner`, as in the daemon, until its scale locks; then
    ``read_locked`` (crop, crop model, needle, value) is timed on the demo's frames in turn: median
    and 90th percentile of ``--runs`` runs per gauge after 10 warm-up runs, with the per-stage split.
    The CPU column is the process's CPU time per call (every thread, onnxruntime's spinning workers
@@ -34,10 +34,10 @@ from mcap.reader import make_reader
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import header  # noqa: E402
 
-from gauged.app import Daemon  # noqa: E402
+from gauged.daemon.app import Daemon  # noqa: E402
 from gauged.config import load_config  # noqa: E402
 from gauged.config.model import GaugedConfig, ReaderConfig  # noqa: E402
-from gauged.gauge_runner import GaugeRunner  # noqa: E402
+from gauged.daemon.gauge_runner import GaugeRunner  # noqa: E402
 from gauged.reader.factory import build_reader  # noqa: E402
 from gauged.reader.pipeline import GaugeReader  # noqa: E402
 from gauged.sources.mcap_source import iter_frames  # noqa: E402

@@ -251,3 +251,12 @@ class Reading:
             "failure": None if self.failure is None else self.failure.to_dict(),
             "reasons": list(self.reasons),
         }
+
+
+class FrameOutcome(str, enum.Enum):
+    """What one call did with its input; the alarms use it to tell fresh values from held ones."""
+
+    ACCEPTED = "accepted"  # a measurement passed the checks and updated the value
+    REJECTED = "rejected"  # a measurement was an outlier or implausible
+    FAILED = "failed"  # the reader gave no usable value
+    NO_FRAME = "no_frame"  # a tick: time passed without a frame

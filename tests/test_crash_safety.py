@@ -239,8 +239,8 @@ def test_sigterm_mid_recording_loses_nothing(tmp_path, reference):
         row = table[last["gauge"]]
         assert row[1] == ("-" if last["value"] is None else f"{last['value']:.3g}") and last["quality"] in row
     # Every alarm the daemon logged is in the file.
-    logged = [line.split("gauged.app: alarm ", 1)[1] for line in stderr.read_text().splitlines()
-              if "gauged.app: alarm " in line]
+    logged = [line.split("gauged.daemon.app: alarm ", 1)[1] for line in stderr.read_text().splitlines()
+              if "gauged.daemon.app: alarm " in line]
     written = [json.loads(d) for _, d in topics.get(ALARMS, [])]
     assert logged, "the run was stopped after the boiler's high alarm"
     assert sorted(logged) == sorted(f"{e['gauge']} {e['level']}: {e['message']}" for e in written)

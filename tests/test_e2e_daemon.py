@@ -1,7 +1,7 @@
 """End to end with the real reader: the daemon over Zenoh on loopback, and ``gauged replay`` as a user runs it.
 
 1. Two dials of the bundled demo, rendered afresh by :func:`gauged.synth.moving_dials.render_frames`
-   (960x540, known truth), are sent to a running :class:`gauged.app.Daemon` by a separate Zenoh
+   (960x540, known truth), are sent to a running :class:`gauged.daemon.app.Daemon` by a separate Zenoh
    session: first as ROS 2 ``sensor_msgs/msg/CompressedImage`` in CDR on an rmw_zenoh-like key
    (type name and type hash after the topic), then as bare JPEG (``image/jpeg``). Another session
    receives the readings, asks the queryable for the latest state and watches the liveliness token.
@@ -30,7 +30,7 @@ from mcap.reader import make_reader
 from mcap.summary import Summary
 from mcap_ros2._dynamic import serialize_dynamic
 
-from gauged.app import Daemon
+from gauged.daemon.app import Daemon
 from gauged.config import parse_config
 from gauged.reader.factory import CROP_MODEL
 from gauged.reader.onnx_model import packaged_model_path

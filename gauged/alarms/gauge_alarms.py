@@ -15,8 +15,7 @@ from typing import Any
 from gauged.alarms.condition import NS_PER_S, DelayedCondition, LimitRule
 from gauged.alarms.config import AlarmsConfig
 from gauged.alarms.lifecycle import Alarm, AlarmEvent, AlarmStatus
-from gauged.tracking.gauge_smoother import FrameOutcome
-from gauged.types import Quality, Reading
+from gauged.types import FrameOutcome, Quality, Reading
 
 RATE_LEVEL = "rate"
 STALE_LEVEL = "stale"

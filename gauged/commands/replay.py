@@ -10,7 +10,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from gauged.app import Daemon
+from gauged.daemon.app import Daemon
 from gauged.config import ConfigError, load_config, load_default_config
 from gauged.config.model import GaugedConfig
 from gauged.reader.onnx_model import ModelNotAvailable

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from gauged import __version__
-from gauged.app import Daemon
+from gauged.daemon.app import Daemon
 from gauged.config import ConfigError, load_config, load_default_config
 from gauged.config.model import GaugedConfig
 from gauged.config.summary import summarize

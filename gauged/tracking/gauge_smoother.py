@@ -18,7 +18,6 @@ when no frame arrives at all. A failed frame never zeroes the value.
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import dataclass
 
@@ -29,7 +28,7 @@ from gauged.tracking.config import (
 )
 from gauged.tracking.hampel import HampelWindow
 from gauged.tracking.smoothers import Ema, Passthrough, ScalarKalman, Smoother
-from gauged.types import Quality, RawReading, Reading, ScaleInfo
+from gauged.types import FrameOutcome, Quality, RawReading, Reading, ScaleInfo
 
 NS_PER_S = 1_000_000_000
 FALLBACK_SPAN = 1.0  # used only until a scale is known; the Kalman gain depends on q/r alone
@@ -41,15 +40,6 @@ REASON_OUTLIER = "outlier"
 REASON_IMPLAUSIBLE = "implausible_rate"
 REASON_HELD = "held"
 REASON_NO_VALID = "no_valid_reading"
-
-
-class FrameOutcome(str, enum.Enum):
-    """What one call did with its input; the alarms use it to tell fresh values from held ones."""
-
-    ACCEPTED = "accepted"  # a measurement passed the checks and updated the value
-    REJECTED = "rejected"  # a measurement was an outlier or implausible
-    FAILED = "failed"  # the reader gave no usable value
-    NO_FRAME = "no_frame"  # a tick: time passed without a frame
 
 
 @dataclass(frozen=True, slots=True)

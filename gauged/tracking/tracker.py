@@ -21,8 +21,8 @@ from gauged.alarms.config import AlarmsConfig
 from gauged.alarms.gauge_alarms import GaugeAlarms
 from gauged.alarms.lifecycle import AlarmEvent, AlarmStatus
 from gauged.tracking.config import SmoothingConfig
-from gauged.tracking.gauge_smoother import NS_PER_S, FrameOutcome, GaugeSmoother
-from gauged.types import RawReading, Reading, ScaleInfo
+from gauged.tracking.gauge_smoother import NS_PER_S, GaugeSmoother
+from gauged.types import FrameOutcome, RawReading, Reading, ScaleInfo
 
 if TYPE_CHECKING:  # the config tree imports this package's config; a runtime import would loop
     from gauged.config.model import GaugeConfig

@@ -11,7 +11,7 @@ from gauged.alarms.commands import AlarmCommand, CommandResult, handle_alarm_com
 from gauged.alarms.config import AlarmsConfig
 from gauged.alarms.gauge_alarms import GaugeAlarms
 from gauged.alarms.lifecycle import AlarmState
-from gauged.tracking.gauge_smoother import FrameOutcome
+from gauged.types import FrameOutcome
 from gauged.types import Quality, Reading, ScaleInfo
 
 NS = 1_000_000_000

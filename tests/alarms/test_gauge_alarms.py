@@ -10,7 +10,7 @@ from gauged.alarms.config import AlarmsConfig
 from gauged.alarms.gauge_alarms import GaugeAlarms
 from gauged.alarms.lifecycle import AlarmEvent, Transition
 from gauged.tracking.config import SmoothingConfig
-from gauged.tracking.gauge_smoother import FrameOutcome
+from gauged.types import FrameOutcome
 from gauged.tracking.tracker import GaugeTracker
 from gauged.types import Quality, RawReading, Reading, ScaleInfo
 

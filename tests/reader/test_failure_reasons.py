@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from gauged.config.model import GaugeConfig, ScaleLockConfig
-from gauged.gauge_runner import GaugeRunner
+from gauged.daemon.gauge_runner import GaugeRunner
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.crop import MIN_GAUGE_PX, Crop, crop_gauge
 from gauged.reader.detect import GaugeDetector

@@ -7,7 +7,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gauged.tracking.config import SmoothingConfig
-from gauged.tracking.gauge_smoother import FrameOutcome, GaugeSmoother
+from gauged.tracking.gauge_smoother import GaugeSmoother
+from gauged.types import FrameOutcome
 from gauged.types import Ellipse, Quality, RawReading, ScaleInfo, ScaleModel, StageFailure
 
 NS = 1_000_000_000

@@ -1,6 +1,6 @@
 from __future__ import annotations
 
-from gauged.association import associate
+from gauged.daemon.association import associate
 from gauged.types import GaugeDetection
 
 

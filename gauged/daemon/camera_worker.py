@@ -13,9 +13,9 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from gauged.association import associate
+from gauged.daemon.association import associate
 from gauged.config.model import CameraConfig
-from gauged.gauge_runner import GaugeOutput, GaugeRunner
+from gauged.daemon.gauge_runner import GaugeOutput, GaugeRunner
 from gauged.metrics import Metrics
 from gauged.sources import FrameSource
 from gauged.types import Box, Frame, GaugeDetection, StageFailure

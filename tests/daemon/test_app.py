@@ -19,7 +19,7 @@ import zenoh
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
-from gauged.app import Daemon
+from gauged.daemon.app import Daemon
 from gauged.commands.replay import batch_config
 from gauged.config import parse_config
 from gauged.reader.pipeline import GaugeRead

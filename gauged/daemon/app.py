@@ -24,9 +24,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from gauged.camera_worker import CameraWorker
+from gauged.daemon.camera_worker import CameraWorker
 from gauged.config.model import GaugedConfig
-from gauged.gauge_runner import GaugeOutput, GaugeRunner, Reader
+from gauged.daemon.gauge_runner import GaugeOutput, GaugeRunner, Reader
 from gauged.metrics import Metrics
 from gauged.reader.failures import failure_pairs
 from gauged.sinks import BufferedSink, open_sinks
