@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 # The OCR models: the rapidocr wheel carries the PP-OCRv6 detection and recognition ONNX files, which
-# gauged runs with its own onnxruntime code (gauged/reader/ocr_engine.py). --no-deps: none of the
+# gauged runs with its own onnxruntime code (gauged/reader/ocr/engine.py). --no-deps: none of the
 # package's Python dependencies (downloaders, config libraries) is used.
 OCR_PACKAGE := rapidocr==3.10.0
 # Re-install whenever pyproject.toml or constraints.txt changes. constraints.txt pins every package to the

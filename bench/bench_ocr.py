@@ -40,9 +40,9 @@ from gauged.types import Ellipse  # noqa: E402
 from gauged.geometry.angles import wrap_angle  # noqa: E402
 from gauged.geometry.dial_frame import dial_angle  # noqa: E402
 from gauged.geometry.ellipse_fit import fit_ellipse  # noqa: E402
-from gauged.reader.ellipse import ScaleArc  # noqa: E402
-from gauged.reader.ocr import ScaleTextReader  # noqa: E402
-from gauged.reader.ocr_engine import MODEL_SETS, OcrUnavailable, crop_quad, find_model_files  # noqa: E402
+from gauged.reader.stages.ellipse import ScaleArc  # noqa: E402
+from gauged.reader.stages.ocr import ScaleTextReader  # noqa: E402
+from gauged.reader.ocr.engine import MODEL_SETS, OcrUnavailable, crop_quad, find_model_files  # noqa: E402
 from gauged.training.dial_renderer import render_crop  # noqa: E402
 
 

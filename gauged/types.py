@@ -176,7 +176,7 @@ class ScaleModel:
     inliers: int = 0
     rms_value: float = 0.0
     markers: tuple[ScaleMarker, ...] = ()
-    full_circle: bool = False  # no gap: the scale runs all the way round (gauged.reader.full_circle)
+    full_circle: bool = False  # no gap: the scale runs all the way round (gauged.reader.stages.full_circle)
 
     def unwrap(self, angle: float) -> float:
         """Map a dial angle into ``[zero_angle, zero_angle + 2 pi)``."""

@@ -22,7 +22,7 @@ def test_no_runtime_module_imports_torch():
 
 def test_running_the_daemon_and_reader_loads_no_torch():
     code = (
-        "import sys, gauged.cli, gauged.daemon.app, gauged.reader.factory, gauged.reader.pipeline, gauged.reader.ocr, "
+        "import sys, gauged.cli, gauged.daemon.app, gauged.reader.factory, gauged.reader.pipeline, gauged.reader.stages.ocr, "
         "gauged.evaluation.models, gauged.commands.read, gauged.commands.eval, gauged.commands.synth\n"
         "gauged.cli.build_parser()\n"
         "print('torch' in sys.modules)"

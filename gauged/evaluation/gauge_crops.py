@@ -11,8 +11,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from gauged.reader.crop import Crop, crop_gauge
-from gauged.reader.detect import GaugeDetector
+from gauged.reader.stages.crop import Crop, crop_gauge
+from gauged.reader.stages.detect import GaugeDetector
 from gauged.types import StageFailure
 
 READER_CROP_PAD = 0.08  # the reader's default (GaugeReader crop_pad)

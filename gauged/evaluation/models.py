@@ -20,14 +20,28 @@ import cv2
 import numpy as np
 
 from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame
-from gauged.evaluation.model_metrics import angle_error_deg, best_iou, mask_direction, mask_iou, match_points, needle_mask_at
+from gauged.evaluation.model_metrics import (
+    angle_error_deg,
+    best_iou,
+    mask_direction,
+    mask_iou,
+    match_points,
+    needle_mask_at,
+)
 from gauged.evaluation.timing import median_s
-from gauged.reader.detect import GaugeDetector
-from gauged.reader.factory import (CROP_MODEL, DETECTOR_MODEL, NOTCH_CHECK_MODEL, NUMBER_NET_MODEL, OCR_DET_INT8_MODEL,
-                                   helper_model_path, model_path)
-from gauged.reader.keypoints import CropKeypoints, decode_crop_maps
-from gauged.reader.notch_check import NotchCheck
+from gauged.reader.factory import (
+    CROP_MODEL,
+    DETECTOR_MODEL,
+    NOTCH_CHECK_MODEL,
+    NUMBER_NET_MODEL,
+    OCR_DET_INT8_MODEL,
+    helper_model_path,
+    model_path,
+)
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, to_model_input
+from gauged.reader.stages.detect import GaugeDetector
+from gauged.reader.stages.keypoints import CropKeypoints, decode_crop_maps
+from gauged.reader.stages.notch_check import NotchCheck
 from gauged.types import StageFailure
 
 

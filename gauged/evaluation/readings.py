@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gauged.reader.ocr_engine import quad_height
+from gauged.reader.ocr.engine import quad_height
 from gauged.types import StageFailure
 
 # Bins (px) of the median printed-number height of an image's main scale as captured, for the
@@ -93,7 +93,7 @@ def _printed_unit(gauge: dict) -> str | None:
 
 
 def _number_height(gauge: dict) -> float | None:
-    """Median height (px, :func:`gauged.reader.ocr_engine.quad_height`) of the printed numbers of a
+    """Median height (px, :func:`gauged.reader.ocr.engine.quad_height`) of the printed numbers of a
     synthetic gauge's primary scale, or None when not labelled."""
     scales = [s for s in gauge.get("scales", ()) if s.get("role") == "primary"]
     heights = [quad_height(n["quad"]) for s in scales for n in s.get("numbers", ()) if n.get("quad")]

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import logging
-
 from pathlib import Path
 
 from gauged.config.model import ReaderConfig
-from gauged.reader.detect import GaugeDetector
-from gauged.reader.notch_check import NotchCheck
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path
 from gauged.reader.pipeline import GaugeReader
+from gauged.reader.stages.detect import GaugeDetector
+from gauged.reader.stages.notch_check import NotchCheck
 
 log = logging.getLogger(__name__)
 
@@ -52,8 +51,8 @@ def build_reader(config: ReaderConfig) -> GaugeReader:
             notch_check = NotchCheck(helper_model_path(NOTCH_CHECK_MODEL, config.models_dir), config.threads)
         except ModelNotAvailable as exc:
             log.warning("%s; every major-notch peak of the crop model is used", exc)
-    from gauged.reader.ocr import ScaleTextReader
-    from gauged.reader.ocr_engine import OcrUnavailable
+    from gauged.reader.ocr.engine import OcrUnavailable
+    from gauged.reader.stages.ocr import ScaleTextReader
 
     try:
         ocr = ScaleTextReader(threads=config.threads,

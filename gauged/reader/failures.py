@@ -2,7 +2,16 @@
 
 from __future__ import annotations
 
-from gauged.reader import crop, detect, ellipse, keypoints, needle, ocr, reading, scale
+from gauged.reader.stages import (
+    crop,
+    detect,
+    ellipse,
+    keypoints,
+    needle,
+    ocr,
+    reading,
+    scale,
+)
 
 OCR_UNAVAILABLE = "ocr_unavailable"  # the pipeline's own: no OCR engine and no configured scale
 

@@ -15,21 +15,26 @@ from typing import Protocol
 
 import numpy as np
 
-from gauged.reader.crop import Crop, crop_gauge
-from gauged.reader.detect import GaugeDetector
-from gauged.reader.ellipse import NUMBERS_OUTSIDE_SCALE, POOR_FIT, ScaleArc, arc_about_pivot, fit_scale_arc
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
-from gauged.reader.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
-from gauged.reader.keypoints import CropKeypoints, Peaks, decode_crop_maps
-from gauged.reader.needle import NeedleReading, fit_needle
-from gauged.reader.notch_check import NotchCheck
-from gauged.reader.ocr import NO_NUMBERS
+from gauged.reader.ocr.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
+from gauged.reader.ocr.units import PrintedUnit
 from gauged.reader.onnx_model import OnnxModel, to_model_input
-from gauged.reader.reading import Value, read_value, value_on
-from gauged.reader.scale import fit_scales, scale_from_prior
-from gauged.reader.units import PrintedUnit
+from gauged.reader.stages.crop import Crop, crop_gauge
+from gauged.reader.stages.detect import GaugeDetector
+from gauged.reader.stages.ellipse import (
+    NUMBERS_OUTSIDE_SCALE,
+    POOR_FIT,
+    ScaleArc,
+    arc_about_pivot,
+    fit_scale_arc,
+)
+from gauged.reader.stages.keypoints import CropKeypoints, Peaks, decode_crop_maps
+from gauged.reader.stages.needle import NeedleReading, fit_needle
+from gauged.reader.stages.notch_check import NotchCheck
+from gauged.reader.stages.ocr import NO_NUMBERS
+from gauged.reader.stages.reading import Value, read_value, value_on
+from gauged.reader.stages.scale import fit_scales, scale_from_prior
 from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
-
 
 DETAIL_SIZE = 640  # px: the largest square the OCR samples its rectified view from
 DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much more detail than the crop
@@ -67,7 +72,7 @@ MarkersRead = tuple[list[ScaleMarker], tuple[PrintedUnit, ...]]  # the OCR stage
 
 
 class ScaleTextReader(Protocol):
-    """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.ocr`)."""
+    """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.stages.ocr`)."""
 
     def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
                      ) -> MarkersRead | StageFailure:
@@ -359,7 +364,7 @@ class GaugeReader:
         (held-out 000578: axis ratio 0.97, the pivot 0.06 radii off), and the numbers' angles about the
         wrong centre then bend by 5-10% from one number to the next, past the scale line's 3-degree
         tolerance ("100, 200, 300" read right, two on a line). So a refused scale gets its ring measured
-        about the pivot (:func:`gauged.reader.ellipse.arc_about_pivot`, no new fit), the needle against
+        about the pivot (:func:`gauged.reader.stages.ellipse.arc_about_pivot`, no new fit), the needle against
         it, and the scale fitted to the markers read, then to markers read again on the dial rectified
         about the pivot. The refusal stands unless the scale stage accepts them.
         """
@@ -449,7 +454,7 @@ class GaugeReader:
                    units: tuple[PrintedUnit, ...],
                    hints: np.ndarray, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | None:
         """The scales of the numbers the number net reads at the crop model's number peaks
-        (:mod:`gauged.reader.hint_numbers`), or None: a last look at a dial whose text the OCR could
+        (:mod:`gauged.reader.ocr.hint_numbers`), or None: a last look at a dial whose text the OCR could
         not read. The refusal stands unless the scale stage accepts these numbers, and their scale
         does not cross zero (the net drops minus signs)."""
         if not self.ocr.has_number_net:
@@ -523,7 +528,7 @@ class GaugeReader:
         result.units = units
         if isinstance(scales, StageFailure) and scales.stage in SECOND_LOOK:
             # The numbers read gave no scale: look again for the grid the ring's texts most likely
-            # print (gauged.reader.likely_scale). Only refusals get this look, and the original
+            # print (gauged.reader.ocr.likely_scale). Only refusals get this look, and the original
             # refusal stands unless the scale stage accepts what it finds.
             with timer("ocr"):
                 again = self.ocr.reread_markers(crop.image, arc, numbers.points, detail)

@@ -17,7 +17,7 @@ from statistics import median
 import numpy as np
 
 from gauged.geometry.angles import wrap_angle
-from gauged.reader.ellipse import ScaleArc
+from gauged.reader.stages.ellipse import ScaleArc
 from gauged.types import Box, Ellipse, ScaleModel
 
 NS_PER_S = 1_000_000_000

@@ -5,7 +5,7 @@ unit and distractor text, needle with counterweight and hub), then warped by a r
 (tilt up to 60 degrees, in-plane rotation, scale, shift) into the output; every label point goes
 through the same homography, so labels are exact in the project's pixel convention.
 
-Channels labelled per crop (see :data:`gauged.reader.keypoints.CROP_CHANNELS`): ``start``/``end``
+Channels labelled per crop (see :data:`gauged.reader.stages.keypoints.CROP_CHANNELS`): ``start``/``end``
 (the end notches of the scale), ``major`` (every major notch, on the scale circle), ``tip`` and
 ``pivot`` of the needle, ``numbers`` (centres of the scale numbers), and the needle mask (the
 pointing part, pivot to tip, as the real needle-polygons labels are).

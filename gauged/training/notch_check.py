@@ -1,6 +1,6 @@
 """The notch check: a small CNN that tells the crop model's major-notch peaks from minor ticks (session 25).
 
-Run by the reader as :class:`gauged.reader.notch_check.NotchCheck` (``gauged/models/notch_check.onnx``).
+Run by the reader as :class:`gauged.reader.stages.notch_check.NotchCheck` (``gauged/models/notch_check.onnx``).
 Its data are the shipped crop model's own peaks on engine crops, each labelled by the engine's truth:
 a labelled major notch within issue 4's tolerance (4 px at 448) is a 1, a peak farther than twice the
 tolerance from every labelled major is a 0, and the near misses in between are left out of training
@@ -35,9 +35,9 @@ import torch
 from torch import nn
 
 from gauged.evaluation.models import render_scale
-from gauged.reader.keypoints import decode_crop_maps
-from gauged.reader.notch_check import PATCH, notch_windows, peak_features
 from gauged.reader.onnx_model import OnnxModel, to_model_input
+from gauged.reader.stages.keypoints import decode_crop_maps
+from gauged.reader.stages.notch_check import PATCH, notch_windows, peak_features
 from gauged.training.shards import open_crop_shard
 
 log = logging.getLogger(__name__)

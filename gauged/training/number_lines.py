@@ -1,8 +1,8 @@
 """A recogniser of scale numbers trained on the engine's renders: data, net and training (session 10).
 
-The reader reads numbers with PP-OCR's recogniser (:mod:`gauged.reader.ocr_engine`), and reads a
+The reader reads numbers with PP-OCR's recogniser (:mod:`gauged.reader.ocr.engine`), and reads a
 dial again with this net (exported to ``gauged/models/numbers.onnx``, run by
-:mod:`gauged.reader.number_net`) only when its first numbers gave no scale.
+:mod:`gauged.reader.ocr.number_net`) only when its first numbers gave no scale.
 Cut at their true quads, PP-OCR reads 71.2% of the held-out numbers captured 5-10 px tall and 87.8%
 of those 10-14 px; this net (its first, width-48 version), trained on number lines of other seeds
 cut the same way, reads 85.9% and 93.5% (docs/ocr.md, "A recogniser of our own").
@@ -34,9 +34,9 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from gauged.reader.number_net import CHARS, LINE_HEIGHT, LINE_WIDTH, to_line_input
-from gauged.reader.number_net import greedy_decode as decode_logits
-from gauged.reader.ocr_engine import crop_quad
+from gauged.reader.ocr.engine import crop_quad
+from gauged.reader.ocr.number_net import CHARS, LINE_HEIGHT, LINE_WIDTH, to_line_input
+from gauged.reader.ocr.number_net import greedy_decode as decode_logits
 from gauged.synth.crop import render_crop
 
 log = logging.getLogger(__name__)
@@ -207,8 +207,8 @@ def compare_with_ppocr(folder: Path, weights: Path, limit: int | None = None) ->
     """Per captured-height bin: the share of the main scale's numbers of a ``gauged synth images``
     folder whose value PP-OCR's recogniser (the reader's) and this net read right, each number cut
     at its true quad the same way for both (no jitter)."""
-    from gauged.reader.numbers import parse_number
-    from gauged.reader.ocr_engine import OcrEngine
+    from gauged.reader.ocr.engine import OcrEngine
+    from gauged.reader.ocr.numbers import parse_number
     from gauged.types import StageFailure
 
     def value(text: str) -> float | None:
@@ -244,7 +244,7 @@ def compare_with_ppocr(folder: Path, weights: Path, limit: int | None = None) ->
 
 
 def export_onnx(weights: Path, out: Path) -> None:
-    """The trained net as ONNX (opset 17, any batch size) for :class:`gauged.reader.number_net.NumberNet`."""
+    """The trained net as ONNX (opset 17, any batch size) for :class:`gauged.reader.ocr.number_net.NumberNet`."""
     state = torch.load(weights)
     net = NumberNet(width_of(state))
     net.load_state_dict(state)

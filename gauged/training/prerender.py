@@ -16,7 +16,12 @@ import numpy as np
 
 from gauged.evaluation.gauge_crops import best_gauge_crop, crop_mask, shipped_detector
 from gauged.training.real_data import load_needle_split
-from gauged.training.shards import CropSample, DetectorSample, write_crop_shard, write_detector_shard
+from gauged.training.shards import (
+    CropSample,
+    DetectorSample,
+    write_crop_shard,
+    write_detector_shard,
+)
 from gauged.training.targets import arc_end_points
 
 log = logging.getLogger(__name__)
@@ -25,7 +30,7 @@ log = logging.getLogger(__name__)
 def real_needle_samples(root: Path, split: str, size: int, detector=None) -> Iterator[CropSample]:
     """Needle-polygons photos resized to ``size``² with their needle masks; no keypoint labels.
 
-    With a ``detector`` (:class:`gauged.reader.detect.GaugeDetector`) each photo is cut the reader's
+    With a ``detector`` (:class:`gauged.reader.stages.detect.GaugeDetector`) each photo is cut the reader's
     way instead, to the square crop of its best gauge (:mod:`gauged.evaluation.gauge_crops`); a photo
     where it finds no gauge is kept whole, as the reader would then have nothing to read.
     """
@@ -116,7 +121,7 @@ def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int 
 
 
 def _render_scene(args: tuple[int, int]) -> DetectorSample:
-    from gauged.reader.detect import Letterbox
+    from gauged.reader.stages.detect import Letterbox
     from gauged.training.dial_renderer import render_scene
 
     seed, size = args

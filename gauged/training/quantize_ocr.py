@@ -13,7 +13,7 @@ Calibration inputs are recorded from the float reader itself, reading synthetic 
 no training or evaluation set uses (5,000,000 + i; only sanity tests render them) and, when given, real needle-polygons ``train``
 photos: the detector sees the rectified rings, polar strips and hint windows the reader cuts, at the
 sizes it cuts them. The output carries, in its ``gauged`` metadata, the SHA-256 of the float file
-it was made from, so the engine uses it only with that file (:mod:`gauged.reader.ocr_engine`).
+it was made from, so the engine uses it only with that file (:mod:`gauged.reader.ocr.engine`).
 
 Needs the ``train`` extra (``onnx``); onnxruntime's quantization tools come with onnxruntime.
 """
@@ -86,7 +86,13 @@ def record_detector_inputs(images: list[np.ndarray], threads: int) -> list[np.nd
 def quantize(source: Path, inputs: list[np.ndarray], out: Path, provenance: dict) -> None:
     import onnx
     from onnx import version_converter
-    from onnxruntime.quantization import CalibrationDataReader, CalibrationMethod, QuantFormat, QuantType, quantize_static
+    from onnxruntime.quantization import (
+        CalibrationDataReader,
+        CalibrationMethod,
+        QuantFormat,
+        QuantType,
+        quantize_static,
+    )
     from onnxruntime.quantization.shape_inference import quant_pre_process
 
     class Inputs(CalibrationDataReader):
@@ -130,7 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=2)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-    from gauged.reader.ocr_engine import file_sha256, find_model_files
+    from gauged.reader.ocr.engine import file_sha256, find_model_files
 
     source, _ = find_model_files(args.package)
     images = calibration_images(args.renders, args.needles, args.photos)

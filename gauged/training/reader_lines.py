@@ -66,9 +66,9 @@ class _Observed:
 @contextmanager
 def observing_lines() -> Iterator[_Observed]:
     """Note every line the reader's OCR recognises, with its quad mapped back to the frame."""
-    import gauged.reader.ocr as ocr
-    import gauged.reader.ocr_engine as engine
+    import gauged.reader.ocr.engine as engine
     import gauged.reader.pipeline as pipeline
+    import gauged.reader.stages.ocr as ocr
 
     seen = _Observed()
     crop_gauge, rectified, crop_quad, recognize = pipeline.crop_gauge, ocr._rectified, ocr.crop_quad, engine.OcrEngine.recognize
@@ -157,7 +157,7 @@ def _read_folder(job: tuple[str, int, int]) -> dict:
     """Run the reader on images ``start:stop`` of a ``gauged synth images`` folder and label its lines."""
     from gauged.config.model import ReaderConfig
     from gauged.reader.factory import build_reader
-    from gauged.reader.number_net import to_line_input
+    from gauged.reader.ocr.number_net import to_line_input
 
     folder, start, stop = Path(job[0]), job[1], job[2]
     records = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][start:stop]

@@ -14,7 +14,6 @@ from collections.abc import Mapping
 import cv2
 import numpy as np
 
-
 SIGMA_CELLS = 1.5  # width of a keypoint peak in the crop model's targets, in output cells
 
 

@@ -22,9 +22,19 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame, shipped_detector
-from gauged.evaluation.model_metrics import angle_error_deg, mask_direction, mask_iou, match_points, needle_mask_at
-from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps
+from gauged.evaluation.gauge_crops import (
+    best_gauge_crop,
+    crop_logits_in_frame,
+    shipped_detector,
+)
+from gauged.evaluation.model_metrics import (
+    angle_error_deg,
+    mask_direction,
+    mask_iou,
+    match_points,
+    needle_mask_at,
+)
+from gauged.reader.stages.keypoints import CROP_CHANNELS, decode_crop_maps
 from gauged.training.augment import photometric, random_affine, warp_image, warp_points
 from gauged.training.loop import TrainSettings, train
 from gauged.training.losses import crop_loss
@@ -201,7 +211,7 @@ def load_real_needle_val(root: Path, size: int, detector=None) -> list[tuple[np.
     own resolution (the IoU is measured there, as the paper does), and None.
 
     With a ``detector``, each photo is cut to its detected gauge the reader's way instead, and the third
-    item is that :class:`gauged.reader.crop.Crop` (photos without a detection stay whole, with None)."""
+    item is that :class:`gauged.reader.stages.crop.Crop` (photos without a detection stay whole, with None)."""
     import cv2
 
     out = []

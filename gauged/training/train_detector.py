@@ -21,7 +21,7 @@ import numpy as np
 import torch
 
 from gauged.evaluation.model_metrics import best_iou
-from gauged.reader.detect import Letterbox, decode_detections
+from gauged.reader.stages.detect import Letterbox, decode_detections
 from gauged.training.augment import photometric
 from gauged.training.loop import TrainSettings, train
 from gauged.training.losses import detector_loss

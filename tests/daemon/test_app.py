@@ -23,8 +23,8 @@ from gauged.daemon.app import Daemon
 from gauged.commands.replay import batch_config
 from gauged.config import parse_config
 from gauged.reader.pipeline import GaugeRead
-from gauged.reader.reading import Value
-from gauged.reader.units import PrintedUnit
+from gauged.reader.stages.reading import Value
+from gauged.reader.ocr.units import PrintedUnit
 from gauged.types import StageFailure
 
 BASE_NS = 1_700_000_000_000_000_000

@@ -38,7 +38,7 @@ def check_mdwe() -> None:
 def run_ocr(int8_detector) -> None:
     import numpy as np
 
-    from gauged.reader.ocr_engine import OcrEngine, OcrUnavailable
+    from gauged.reader.ocr.engine import OcrEngine, OcrUnavailable
 
     try:
         engine = OcrEngine(threads=2, int8_detector=int8_detector)
@@ -61,7 +61,7 @@ def run_onnx() -> None:
             if path.name.startswith("ocr_"):  # the OCR's own files run in OcrEngine, below
                 continue
             if path.name == "numbers.onnx":  # reads text lines, not images
-                from gauged.reader.number_net import NumberNet
+                from gauged.reader.ocr.number_net import NumberNet
 
                 print(f"onnx: {path.name} -> {NumberNet(path, threads=2).read([np.zeros((20, 40, 3), np.uint8)])}")
                 continue
@@ -88,8 +88,8 @@ def run_onnx() -> None:
 def run_notch_check(path: Path) -> None:
     import numpy as np
 
-    from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps
-    from gauged.reader.notch_check import NotchCheck
+    from gauged.reader.stages.keypoints import CROP_CHANNELS, decode_crop_maps
+    from gauged.reader.stages.notch_check import NotchCheck
 
     logits = np.full((len(CROP_CHANNELS), 128, 128), -5.0, np.float32)
     logits[CROP_CHANNELS.index("major"), 40, 60] = 5.0

@@ -8,7 +8,7 @@ import pytest
 
 from gauged.evaluation.gauge_crops import best_gauge_crop, crop_logits_in_frame, crop_mask
 from gauged.evaluation.model_metrics import mask_iou
-from gauged.reader.crop import crop_gauge
+from gauged.reader.stages.crop import crop_gauge
 
 
 def _frame_with_needle(height: int = 300, width: int = 400) -> np.ndarray:

@@ -11,9 +11,9 @@ import pytest
 
 from gauged.evaluation.model_metrics import match_points
 from gauged.geometry.boxes import box_iou
-from gauged.reader.detect import GaugeDetector
+from gauged.reader.stages.detect import GaugeDetector
 from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL
-from gauged.reader.keypoints import decode_crop_maps
+from gauged.reader.stages.keypoints import decode_crop_maps
 from gauged.reader.onnx_model import OnnxModel, packaged_model_path, to_model_input
 from gauged.synth.crop import render_crop
 from gauged.synth.scene import render_scene

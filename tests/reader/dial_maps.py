@@ -13,7 +13,12 @@ import cv2
 import numpy as np
 
 from gauged.geometry.dial_frame import point_at_dial_angle
-from gauged.reader.keypoints import CROP_CHANNELS, Peaks, CropKeypoints, find_peaks
+from gauged.reader.stages.keypoints import (
+    CROP_CHANNELS,
+    CropKeypoints,
+    Peaks,
+    find_peaks,
+)
 from gauged.training.targets import gaussian_heatmap
 from gauged.types import Ellipse
 

@@ -8,7 +8,14 @@ from pathlib import Path
 import pytest
 
 from gauged.config.model import ReaderConfig
-from gauged.reader.factory import CROP_MODEL, DETECTOR_MODEL, NUMBER_NET_MODEL, build_reader, model_path, helper_model_path
+from gauged.reader.factory import (
+    CROP_MODEL,
+    DETECTOR_MODEL,
+    NUMBER_NET_MODEL,
+    build_reader,
+    helper_model_path,
+    model_path,
+)
 from gauged.reader.onnx_model import ModelNotAvailable, packaged_model_path
 
 

@@ -17,15 +17,15 @@ import pytest
 from gauged.config.model import GaugeConfig, ScaleLockConfig
 from gauged.daemon.gauge_runner import GaugeRunner
 from gauged.geometry.dial_frame import point_at_dial_angle
-from gauged.reader.crop import MIN_GAUGE_PX, Crop, crop_gauge
-from gauged.reader.detect import GaugeDetector
-from gauged.reader.ellipse import fit_scale_arc
 from gauged.reader.failures import failure_pairs
-from gauged.reader.keypoints import CROP_CHANNELS
-from gauged.reader.needle import NeedleReading, fit_needle
 from gauged.reader.pipeline import GaugeReader, KnownScale
-from gauged.reader.reading import Value, read_value
-from gauged.reader.scale import fit_scales, scale_from_prior
+from gauged.reader.stages.crop import MIN_GAUGE_PX, Crop, crop_gauge
+from gauged.reader.stages.detect import GaugeDetector
+from gauged.reader.stages.ellipse import fit_scale_arc
+from gauged.reader.stages.keypoints import CROP_CHANNELS
+from gauged.reader.stages.needle import NeedleReading, fit_needle
+from gauged.reader.stages.reading import Value, read_value
+from gauged.reader.stages.scale import fit_scales, scale_from_prior
 from gauged.tracking.tracker import GaugeTracker
 from gauged.training.targets import gaussian_heatmap
 from gauged.types import Ellipse, Frame, ScaleMarker, StageFailure

@@ -8,9 +8,9 @@ import pytest
 
 from gauged.commands.read import record
 from gauged.reader.factory import CROP_MODEL
+from gauged.reader.ocr.units import UNIT_SIZE
 from gauged.reader.onnx_model import OnnxModel, packaged_model_path
 from gauged.reader.pipeline import GROW, GaugeReader
-from gauged.reader.units import UNIT_SIZE
 from gauged.synth.crop import render_crop
 from gauged.types import GaugeDetection, StageFailure
 
@@ -100,7 +100,7 @@ def _full_reader(**config) -> GaugeReader:
     """The shipped reader with OCR (2 threads), or a skip when the OCR engine is not installed."""
     from gauged.config.model import ReaderConfig
     from gauged.reader.factory import build_reader
-    from gauged.reader.ocr_engine import OcrUnavailable
+    from gauged.reader.ocr.engine import OcrUnavailable
 
     try:
         return build_reader(ReaderConfig(threads=2, **config))
@@ -130,7 +130,7 @@ def _read_right(reader: GaugeReader, image: np.ndarray, gauge: dict, share: floa
 def test_a_refused_scale_gets_a_second_look_at_its_ring_texts():
     """A -1..0 dial (engine render 39 of seed 7,000,000) whose numbers lose their minus signs and
     decimal points: the first reading has two consistent numbers and is refused; the second look
-    (gauged.reader.likely_scale) finds the grid in the recogniser's probabilities and reads it."""
+    (gauged.reader.ocr.likely_scale) finds the grid in the recogniser's probabilities and reads it."""
     reader = _full_reader(ocr_number_net=False)  # without the number net's retry, which runs before the second look
     image, record = _render(7_000_000, 39, jpeg=False)
     gauge = record["gauges"][0]

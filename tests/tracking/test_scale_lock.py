@@ -5,7 +5,7 @@ import math
 import numpy as np
 
 from gauged.geometry.angles import wrap_angle
-from gauged.reader.ellipse import ScaleArc
+from gauged.reader.stages.ellipse import ScaleArc
 from gauged.tracking.scale_lock import Candidate, ScaleLock, fuse
 from gauged.types import Ellipse, ScaleModel
 

@@ -9,7 +9,12 @@ import pytest
 torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
 
 from gauged.evaluation.model_metrics import needle_mask_at  # noqa: E402
-from gauged.training.losses import crop_loss, lovasz_hinge, mask_loss, upsampled_mask_loss  # noqa: E402
+from gauged.training.losses import (  # noqa: E402
+    crop_loss,
+    lovasz_hinge,
+    mask_loss,
+    upsampled_mask_loss,
+)
 from gauged.training.targets import downsample_mask  # noqa: E402
 
 

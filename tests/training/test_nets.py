@@ -8,7 +8,7 @@ import pytest
 
 torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
 
-from gauged.reader.keypoints import CROP_CHANNELS  # noqa: E402
+from gauged.reader.stages.keypoints import CROP_CHANNELS  # noqa: E402
 from gauged.training.nets import CropNet  # noqa: E402
 from gauged.training.train_crop import export_onnx, shipped_maps, train_channels  # noqa: E402
 

@@ -9,10 +9,19 @@ import pytest
 
 torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
 
-from gauged.reader.keypoints import CROP_CHANNELS, Peaks, decode_crop_maps  # noqa: E402
-from gauged.reader.notch_check import PATCH, NotchCheck  # noqa: E402
-from gauged.training.notch_check import (CHANNELS, MAJOR, NEAR, OTHER, choose_threshold, export_onnx,  # noqa: E402
-                                         kept_figures, load_net, train)
+from gauged.reader.stages.keypoints import CROP_CHANNELS, Peaks, decode_crop_maps  # noqa: E402
+from gauged.reader.stages.notch_check import PATCH, NotchCheck  # noqa: E402
+from gauged.training.notch_check import (  # noqa: E402
+    CHANNELS,
+    MAJOR,
+    NEAR,
+    OTHER,
+    choose_threshold,
+    export_onnx,
+    kept_figures,
+    load_net,
+    train,
+)
 
 
 def test_kept_figures_count_the_majors_kept_and_the_others_let_through():
@@ -58,7 +67,7 @@ def test_a_short_run_learns_exports_and_runs_in_the_readers_wrapper(tmp_path):
     assert len(keypoints.major) > 0
     p = check.probabilities(image, logits, keypoints)
     net, _ = load_net(tmp_path / "run" / "best.pt")
-    from gauged.reader.notch_check import notch_windows, peak_features
+    from gauged.reader.stages.notch_check import notch_windows, peak_features
 
     with torch.no_grad():
         expected = torch.sigmoid(net(torch.from_numpy(notch_windows(image, logits, keypoints.major.points)),

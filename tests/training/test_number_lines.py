@@ -8,8 +8,18 @@ import pytest
 torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
 
 from gauged.synth.crop import render_crop  # noqa: E402
-from gauged.training.number_lines import (CHARS, LINE_HEIGHT, LINE_WIDTH, NumberNet, encode, exact_by_height,  # noqa: E402
-                                          greedy_decode, number_lines, to_line_input, train_number_net)
+from gauged.training.number_lines import (  # noqa: E402
+    CHARS,
+    LINE_HEIGHT,
+    LINE_WIDTH,
+    NumberNet,
+    encode,
+    exact_by_height,
+    greedy_decode,
+    number_lines,
+    to_line_input,
+    train_number_net,
+)
 
 
 def test_lines_of_a_render_carry_its_printed_numbers():
@@ -45,7 +55,7 @@ def test_training_writes_the_best_checkpoint(tmp_path):
 
 
 def test_a_narrower_net_trains_and_exports_at_its_own_width(tmp_path):
-    from gauged.reader.number_net import NumberNet as RuntimeNumberNet
+    from gauged.reader.ocr.number_net import NumberNet as RuntimeNumberNet
     from gauged.training.number_lines import export_onnx, width_of
 
     rng = np.random.default_rng(1)

@@ -8,7 +8,12 @@ import pytest
 
 pytest.importorskip("onnx", reason="the train extra (onnx) is not installed")
 
-from gauged.reader.ocr_engine import OcrEngine, OcrUnavailable, file_sha256, find_model_files  # noqa: E402
+from gauged.reader.ocr.engine import (  # noqa: E402
+    OcrEngine,
+    OcrUnavailable,
+    file_sha256,
+    find_model_files,
+)
 from gauged.training.quantize_ocr import main  # noqa: E402
 
 

@@ -46,7 +46,7 @@ def test_lines_of_a_render_are_labelled_with_its_printed_numbers(tmp_path):
                            "--count", "3", "--seed", "5000300", "--out", str(tmp_path / "renders")],
                           capture_output=True, text=True, timeout=300)
     assert made.returncode == 0, made.stderr
-    import gauged.reader.ocr as ocr
+    import gauged.reader.stages.ocr as ocr
 
     before = ocr.crop_quad
     seen = []

@@ -7,14 +7,14 @@ import pytest
 
 torch = pytest.importorskip("torch", reason="the train extra (torch==2.13.0) is not installed")
 
-from gauged.reader.keypoints import CROP_CHANNELS, decode_crop_maps  # noqa: E402
 from gauged.reader.onnx_model import OnnxModel  # noqa: E402
+from gauged.reader.stages.keypoints import CROP_CHANNELS, decode_crop_maps  # noqa: E402
 from gauged.training.loop import TrainSettings, train  # noqa: E402
 from gauged.training.losses import crop_loss, detector_loss  # noqa: E402
 from gauged.training.nets import CropNet, DetNet  # noqa: E402
 from gauged.training.shards import CropSample  # noqa: E402
-from gauged.training.train_crop import augmented, export_onnx  # noqa: E402
 from gauged.training.targets import detector_targets  # noqa: E402
+from gauged.training.train_crop import augmented, export_onnx  # noqa: E402
 
 SIZE = 64
 
