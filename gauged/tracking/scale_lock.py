@@ -76,9 +76,10 @@ def fuse(candidates: list[Candidate], tolerance: float = 0.05) -> Candidate | No
                   zero_angle=wrap_angle(start, end))
     lo, hi = median(c.scale.min_value for c in best), median(c.scale.max_value for c in best)
     span = (arc.end_angle - arc.start_angle) % (2 * math.pi)
-    slope = (hi - lo) / span
+    at_start = lo if reference.scale.slope > 0 else hi  # a scale rising counter-clockwise starts at its max
+    slope = (hi - lo) / span * (1.0 if reference.scale.slope > 0 else -1.0)
     start_unwrapped = arc.zero_angle + (start - arc.zero_angle) % (2 * math.pi)
-    scale = replace(reference.scale, ellipse=ellipse, slope=slope, intercept=lo - slope * start_unwrapped,
+    scale = replace(reference.scale, ellipse=ellipse, slope=slope, intercept=at_start - slope * start_unwrapped,
                     zero_angle=arc.zero_angle, min_value=lo, max_value=hi)
     boxes = np.array([c.box for c in best])
     return Candidate(tuple(float(v) for v in np.median(boxes, axis=0)), arc, scale)

@@ -71,13 +71,14 @@ def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: st
 
 
 def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[PrintedUnit] = (),
-               min_inliers: int = 3, hints: np.ndarray | None = None) -> list[ScaleModel] | StageFailure:
+               min_inliers: int = 3, hints: np.ndarray | None = None, direction: int = 1
+               ) -> list[ScaleModel] | StageFailure:
     """Fit one scale per ring of numbers (:func:`number_rings`), outer ring first, each in the unit
     printed for it (:func:`gauged.reader.ocr.scale_units.label_scales`; ``units`` are the units read on
     the dial, best first).
 
-    A scale must have ``min_inliers`` consistent numbers, increase clockwise and reach both scale
-    ends. When the outer ring of a dual-scale dial yields no scale, its failure is returned even
+    A scale must have ``min_inliers`` consistent numbers, rise in ``direction`` (+1 clockwise, -1
+    counter-clockwise) and reach both scale ends. When the outer ring of a dual-scale dial yields no scale, its failure is returned even
     if the inner ring fits: the inner scale is the secondary one. ``hints`` (N, 2) crop px are the
     crop model's confident number centres: the primary scale must put them on its number grid.
     """
@@ -91,12 +92,12 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[Pr
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")
     whole: ScaleModel | StageFailure | None = None
     if len(rings) == 2:
-        whole = _fit_ring(arc, markers, min_inliers)
+        whole = _fit_ring(arc, markers, min_inliers, direction)
         if not isinstance(whole, StageFailure) and _spans_both(whole, rings):
             # one scale whose numbers only looked like two rings (a skewed ellipse)
             return _finished(arc, [whole], units)
     lone = len(rings) == 1
-    outer = _fit_ring(arc, rings[0], min_inliers)
+    outer = _fit_ring(arc, rings[0], min_inliers, direction)
     if isinstance(outer, StageFailure):
         rescued = _rescue(arc, markers, rings, whole)
         if rescued is None:
@@ -104,7 +105,7 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[Pr
         scales, lone = [rescued], True  # checked as a lone ring is
     else:
         scales = [outer]
-        inner = None if lone else _fit_ring(arc, rings[1], min_inliers)
+        inner = None if lone else _fit_ring(arc, rings[1], min_inliers, direction)
         if inner is not None and not isinstance(inner, StageFailure):
             scales.append(inner)
     if lone:  # a lone ring must be the main scale, and the printed numbers must agree
@@ -144,14 +145,14 @@ def with_round_ends(arc: ScaleArc, model: ScaleModel) -> ScaleModel:
     ends = np.array([model.unwrap(arc.start_angle), model.unwrap(arc.end_angle)])
     fitted = model.slope * ends + model.intercept
     rounded = np.round(fitted / step) * step
-    if np.any(np.abs(fitted - rounded) > ROUND_END * step) or rounded[1] <= rounded[0]:
+    if np.any(np.abs(fitted - rounded) > ROUND_END * step) or (rounded[1] - rounded[0]) * model.slope <= 0:
         return model
     angles = np.concatenate([[model.unwrap(m.angle) for m in agreeing], ends])
     values = np.concatenate([[m.value for m in agreeing], rounded])
     weights = np.sqrt(np.concatenate([np.ones(len(agreeing)), [END_WEIGHT, END_WEIGHT]]))
     design = np.stack([angles, np.ones_like(angles)], axis=1) * weights[:, None]
     (slope, intercept), *_ = np.linalg.lstsq(design, values * weights, rcond=None)
-    low, high = (round(float(v), 12) + 0.0 for v in slope * ends + intercept)  # no float noise: 0..16, not 1e-14..16
+    low, high = sorted(round(float(v), 12) + 0.0 for v in slope * ends + intercept)  # no float noise: 0..16, not 1e-14..16
     return replace(model, slope=float(slope), intercept=float(intercept), min_value=low, max_value=high)
 
 
@@ -231,9 +232,9 @@ def _from_ring(model: ScaleModel, ring: list[ScaleMarker]) -> int:
     return sum(m.box in boxes for m in model.markers if m.inlier)
 
 
-def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int) -> ScaleModel | StageFailure:
+def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int = 1) -> ScaleModel | StageFailure:
     model = fit_scale_model(arc.ellipse, ring, arc.start_angle, arc.end_angle, centre=arc.centre,
-                            min_inliers=min(min_inliers, max(2, len(ring))), expected_sign=1)
+                            min_inliers=min(min_inliers, max(2, len(ring))), expected_sign=direction)
     if isinstance(model, StageFailure):
         return model
     if model.inliers < min_inliers:
@@ -280,7 +281,7 @@ def _rival(model: ScaleModel) -> StageFailure | None:
     for shared in [None, *inliers]:
         group = outliers + ([shared] if shared is not None else [])
         fit = fit_angle_value(np.array([unwrap(m.angle, zero) for m in group], float), np.array([m.value for m in group], float),
-                              min_inliers=len(inliers), expected_sign=1)
+                              min_inliers=len(inliers), expected_sign=1 if model.slope > 0 else -1)
         if isinstance(fit, StageFailure):
             continue
         rival = np.unique([m.value for m, ok in zip(group, fit.inliers, strict=True) if ok])
