@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 from typing import Protocol
 
 from gauged.daemon.association import associate
+from gauged.reader.locate import locate_gauges
 from gauged.config.model import CameraConfig
 from gauged.daemon.gauge_runner import GaugeOutput, GaugeRunner
 from gauged.metrics import Metrics
@@ -112,10 +113,8 @@ class CameraWorker:
         if not unboxed or self.detector is None:
             return boxes
         started = time.perf_counter()
-        detections = self.detector.detect(frame.image)
+        detections, _ = locate_gauges(self.detector, frame.image)  # the rules gauged read and eval use too
         self.metrics.stage_duration.labels(stage="detect").observe(time.perf_counter() - started)
-        if isinstance(detections, StageFailure):
-            return boxes
         for gauge, detection in associate(unboxed, self._previous_boxes, detections).items():
             boxes[gauge] = (detection.box, detection.score)
             self._previous_boxes[gauge] = detection.box

@@ -30,7 +30,7 @@ class Reader(Protocol):
     """What a gauge needs of the reading pipeline (:class:`gauged.reader.pipeline.GaugeReader`)."""
 
     def read_box(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
-                 primary_unit: str | None = None) -> GaugeRead: ...
+                 primary_unit: str | None = None, located: bool = False) -> GaugeRead: ...
 
     def read_locked(self, image: np.ndarray, box: Box, arc: ScaleArc, scale: ScaleModel) -> GaugeRead: ...
 
@@ -83,7 +83,8 @@ class GaugeRunner:
             failure = StageFailure("detect", "gauge_not_found", f"no detection associated with gauge {self.gauge}")
             return self._track(frame, None, failure, lock_changed)
         else:
-            read = self.reader.read_box(frame.image, box, score, self.known, self.config.primary_unit)
+            read = self.reader.read_box(frame.image, box, score, self.known, self.config.primary_unit,
+                                        located=self.config.roi is None)  # a box of gauged.reader.locate
             if read.arc is not None and read.scale is not None and (read.failure is None or read.failure.stage == "reading"):
                 was_locked = self.scale_lock.is_locked
                 if self.scale_lock.offer(box, read.arc, read.scale, frame.stamp_ns):

@@ -16,6 +16,7 @@ from typing import Protocol
 import numpy as np
 
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
+from gauged.reader.locate import locate_gauges, whole_image
 from gauged.reader.ocr.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
 from gauged.reader.ocr.units import PrintedUnit
 from gauged.reader.onnx_model import OnnxModel, to_model_input
@@ -41,13 +42,24 @@ DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much mo
 NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 SECOND_LOOK = ("ocr", "scale")  # refusals of these stages (ocr: only no_numbers) get ScaleTextReader.reread_markers
-CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
 BETWEEN_NUMBERS = 4  # agreeing numbers a dial with hidden ends needs, the needle between them
 PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a close-up), read again
 
 
-def _area(box: Box) -> float:
-    return max(0.0, box[2] - box[0]) * max(0.0, box[3] - box[1])
+def _wider_boxes(image: np.ndarray, box: Box) -> list[Box]:
+    """The larger boxes a located box with no scale ring is read in, in order: a box :data:`GROW`
+    times larger (clipped to the image), the whole image, the whole image with a :data:`PHOTO_MARGIN`
+    around it (as the crop model saw dials in training)."""
+    height, width = image.shape[:2]
+    whole = whole_image(image)
+    m = PHOTO_MARGIN
+    around = (-m * width, -m * height, (1 + m) * width, (1 + m) * height)
+    if tuple(box) == whole:
+        return [around]
+    cx, cy = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
+    half = GROW * max(box[2] - box[0], box[3] - box[1]) / 2
+    grown = (max(0.0, cx - half), max(0.0, cy - half), min(float(width), cx + half), min(float(height), cy + half))
+    return [b for b in (grown, whole, around) if b != tuple(box)]
 
 
 def _sure_numbers(numbers: Peaks) -> np.ndarray:
@@ -188,26 +200,41 @@ class GaugeReader:
 
     def read_image(self, image: np.ndarray, known: KnownScale | None = None,
                    primary_unit: str | None = None) -> list[GaugeRead] | StageFailure:
-        """Detect every gauge in (H, W, 3) uint8 BGR ``image`` and read each, best detection first.
+        """Locate every gauge in (H, W, 3) uint8 BGR ``image`` (:func:`gauged.reader.locate.locate_gauges`,
+        the daemon's rules) and read each box as the daemon reads a located gauge, best first.
 
-        Without a detector the whole image is read as one gauge (a photo cropped to the dial); so is
-        a close-up, where a detection covers :data:`CLOSE_UP` of the image or more, and an image
-        where the detector finds nothing (both read again with a :data:`PHOTO_MARGIN` around them when
-        their notches make no scale ring, :meth:`_read_photo`; with no detection, that read's failure is
-        returned once it got as far as a scale arc, i.e. there is a dial; before that, the detector's
-        failure). So is an image where no
-        detection holds a scale ring: the detector sometimes boxes a number or the hub of a dial that
-        fills the photo. The photo read whole is kept when it gets further than every detection; in a
-        scene of several dials it seldom gets past the ellipse, and then changes nothing. A dial found
-        and then refused (needle, OCR, scale) is not read again: on the held-out renders a second try
-        at such dials answered three of them 4-5x the span off (each check passes a wrong scale now and
-        then, and every try is another chance for one to pass). A read still refused because its notch
-        peaks fit no ring gets the notch check's last look (:meth:`_ring_of_checked_notches`).
+        When the detector found nothing and the image read whole shows no scale arc either, the
+        detector's failure is returned.
         """
-        reads = self._read_all(image, known, primary_unit)
-        if isinstance(reads, StageFailure):
-            return reads
-        return [self._ring_of_checked_notches(image, read, known, primary_unit) for read in reads]
+        located, failure = locate_gauges(self.detector, image)
+        reads = [self.read_box(image, d.box, d.score, known, primary_unit, located=True) for d in located]
+        if failure is not None and reads[0].failure is not None and reads[0].arc is None:
+            return failure
+        return reads
+
+    def read_box(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
+                 primary_unit: str | None = None, located: bool = False) -> GaugeRead:
+        """Read the gauge inside ``box`` (frame pixels) of (H, W, 3) uint8 BGR ``image``.
+
+        A configured ROI is read as given. A ``located`` box (:mod:`gauged.reader.locate`) that holds
+        no scale ring is read again in larger boxes (:meth:`_wider_boxes`): the detector sometimes
+        boxes only the hub, the upper face or a printed number of a dial that fills the view, and a
+        photo cut to its dial runs past the dial's notches. The first wider read that finds a ring is
+        kept, else the read that got furthest. A ring refused for its notch fit gets the notch check's
+        last look (:meth:`_ring_of_checked_notches`). A dial found and then refused (needle, OCR,
+        scale) is not read again: every try is another chance for a wrong scale to pass a check.
+        """
+        read = self._read_once(image, box, score, known, primary_unit)
+        # (an image read whole that shows no notch at all is no dial, not a dial cut by the image's edges)
+        stages = ("ellipse",) if tuple(box) == whole_image(image) else ("crop", "keypoints", "ellipse")
+        if located and read.arc is None and read.failure is not None and read.failure.stage in stages:
+            for wider in _wider_boxes(image, box):
+                again = self._read_once(image, wider, score, known, primary_unit)
+                if again.arc is not None:
+                    read = again
+                    break
+                read = again if _progress(again) > _progress(read) else read
+        return self._ring_of_checked_notches(image, read, known, primary_unit)
 
     def _ring_of_checked_notches(self, image: np.ndarray, read: GaugeRead, known: KnownScale | None,
                                  primary_unit: str | None) -> GaugeRead:
@@ -216,75 +243,14 @@ class GaugeReader:
         got further is kept.
 
         The crop model's major peaks include minor ticks, which bend the ring through them; the notch
-        check drops most of them (gauged/models/README.md, session 25). It is the last look, and only
-        at rings refused. Kept on every crop, it changed right readings too, some of them to wild ones
-        (docs/accuracy.md, session 25); tried before the larger box of :meth:`_read_detection`, it
-        passed a wrong ring on a real dual-scale dial that the larger box reads.
+        check drops most of them (gauged/models/README.md). It is the last look, and only at rings
+        refused: kept on every crop, it changed right readings too, some of them to wild ones.
         """
         if (self.notch_check is None or read.failure is None or read.failure.stage != "ellipse"
                 or read.failure.reason != POOR_FIT):
             return read
         again = self._read_once(image, read.box, read.score, known, primary_unit, check_notches=True)
         return again if _progress(again) > _progress(read) else read
-
-    def _read_all(self, image: np.ndarray, known: KnownScale | None, primary_unit: str | None
-                  ) -> list[GaugeRead] | StageFailure:
-        if self.detector is None:
-            height, width = image.shape[:2]
-            return [self._read_once(image, (0.0, 0.0, float(width), float(height)), 1.0, known, primary_unit)]
-        detections = self.detector.detect(image)
-        height, width = image.shape[:2]
-        whole = (0.0, 0.0, float(width), float(height))
-        if isinstance(detections, StageFailure):
-            # No dial found in the photo as a scene: it may be a close-up of one; the later stages
-            # refuse honestly when it is not a dial at all (the detection failure is then reported).
-            read = self._read_photo(image, 0.0, known, primary_unit)
-            return [read] if read.failure is None or read.arc is not None else detections
-        if any(_area(d.box) >= CLOSE_UP * width * height for d in detections):
-            # A close-up photo of one dial: the photo is the gauge.
-            return [self._read_photo(image, max(d.score for d in detections), known, primary_unit)]
-        reads = [self._read_detection(image, d.box, d.score, known, primary_unit) for d in detections]
-        if all(read.failure is not None and read.arc is None for read in reads):
-            photo = self._read_once(image, whole, max(read.score for read in reads), known, primary_unit)
-            if _progress(photo) > max(_progress(read) for read in reads):
-                return [photo]
-        return reads
-
-    def _read_photo(self, image: np.ndarray, score: float, known: KnownScale | None,
-                    primary_unit: str | None) -> GaugeRead:
-        """Read the whole photo as one gauge; when its notches make no scale ring (a dial that fills
-        the photo runs past its edges, where the crop model finds too few of its notches), read it once
-        more with a :data:`PHOTO_MARGIN` around it and keep the read that got further."""
-        height, width = image.shape[:2]
-        read = self._read_once(image, (0.0, 0.0, float(width), float(height)), score, known, primary_unit)
-        if read.failure is not None and read.failure.stage == "ellipse":
-            m = PHOTO_MARGIN
-            wider = self._read_once(image, (-m * width, -m * height, (1 + m) * width, (1 + m) * height), score,
-                                  known, primary_unit)
-            read = wider if _progress(wider) > _progress(read) else read
-        return read
-
-    def _read_detection(self, image: np.ndarray, box: Box, score: float, known: KnownScale | None,
-                        primary_unit: str | None) -> GaugeRead:
-        """Read a detection; when no scale ring is found in its box, read a box :data:`GROW` times
-        larger (clipped to the image) too: the detector sometimes boxes only the hub or the upper
-        face of a dial that fills the view, and then the ring lies outside the box."""
-        read = self._read_once(image, box, score, known, primary_unit)
-        if read.arc is not None or read.failure is None or read.failure.stage not in ("keypoints", "ellipse"):
-            return read
-        height, width = image.shape[:2]
-        cx, cy = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
-        half = GROW * max(box[2] - box[0], box[3] - box[1]) / 2
-        grown = (max(0.0, cx - half), max(0.0, cy - half), min(float(width), cx + half), min(float(height), cy + half))
-        wider = self._read_once(image, grown, score, known, primary_unit)
-        return wider if wider.arc is not None else read
-
-    def read_box(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
-                 primary_unit: str | None = None) -> GaugeRead:
-        """Read the gauge inside ``box`` (frame pixels) of (H, W, 3) uint8 BGR ``image`` (a configured
-        ROI or a detection), with the notch check's last look when its ring is refused."""
-        return self._ring_of_checked_notches(image, self._read_once(image, box, score, known, primary_unit),
-                                            known, primary_unit)
 
     def _read_once(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
                    primary_unit: str | None = None, check_notches: bool = False) -> GaugeRead:

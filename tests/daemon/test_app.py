@@ -35,7 +35,7 @@ class BrightnessReader:
 
     detector = None
 
-    def read_box(self, image, box, score=1.0, known=None, primary_unit=None) -> GaugeRead:
+    def read_box(self, image, box, score=1.0, known=None, primary_unit=None, located=False) -> GaugeRead:
         x0, y0, x1, y1 = (int(v) for v in box)
         level = float(image[y0:y1, x0:x1].mean())
         read = GaugeRead(box=box, score=score, units=(PrintedUnit("bar", 1.0),), seconds={"needle": 0.001})

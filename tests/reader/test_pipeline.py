@@ -60,7 +60,7 @@ def test_a_lone_refused_detection_of_a_close_up_gives_way_to_the_photo_read_whol
     corner = (0.0, 0.0, 16.0, 16.0)
     reader = GaugeReader(OnnxModel(path, threads=1), detector=HubDetector(corner), ocr=None)
 
-    assert reader._read_detection(sample.image, corner, 0.9, None, None).arc is None
+    assert reader.read_box(sample.image, corner, 0.9).arc is None  # the box as given, not as located
     (read,) = reader.read_image(sample.image)
     assert read.box == (0.0, 0.0, 448.0, 448.0)
     assert read.arc is not None, read.failure
