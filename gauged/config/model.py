@@ -37,7 +37,8 @@ class CameraConfig(BaseModel):
 
 
 class ScaleConfig(BaseModel):
-    """A known scale: skips OCR for this gauge."""
+    """A known scale: its values are used instead of the numbers read, and where the dial's end notches
+    are not found, the numbers read place the configured ends (a strong prior, not a bypass)."""
 
     model_config = ConfigDict(extra="forbid")
 

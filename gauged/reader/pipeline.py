@@ -10,11 +10,12 @@ picture or a scale lock can use them. A known scale (configured prior or a locke
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
 
+from gauged.geometry.angles import wrap_angle, wrap_to_pi
 from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
 from gauged.reader.locate import locate_gauges, whole_image
 from gauged.reader.ocr.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
@@ -23,6 +24,10 @@ from gauged.reader.onnx_model import OnnxModel, to_model_input
 from gauged.reader.stages.crop import Crop, crop_gauge
 from gauged.reader.stages.detect import GaugeDetector
 from gauged.reader.stages.ellipse import (
+    GAP_CLEARLY_LARGER,
+    MAX_SPAN,
+    MIN_SPAN,
+    NO_SCALE_ENDS,
     NUMBERS_OUTSIDE_SCALE,
     POOR_FIT,
     ScaleArc,
@@ -43,7 +48,22 @@ NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's numb
 GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 SECOND_LOOK = ("ocr", "scale")  # refusals of these stages (ocr: only no_numbers) get ScaleTextReader.reread_markers
 BETWEEN_NUMBERS = 4  # agreeing numbers a dial with hidden ends needs, the needle between them
+KNOWN_NUMBERS = 3  # ... and with its scale configured, the needle anywhere in the configured range
 PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a close-up), read again
+
+
+def _arc_at_values(arc: ScaleArc, scale: ScaleModel, low: float, high: float) -> ScaleArc | None:
+    """``arc`` with its ends moved to the dial angles where ``scale``'s line gives ``low`` and ``high``
+    (a configured range), or None when that span is implausible."""
+    if scale.slope == 0:
+        return None
+    start, end = ((v - scale.intercept) / scale.slope for v in (low, high))
+    if scale.slope < 0:
+        start, end = end, start  # the arc's ends run clockwise; the values then fall
+    if not MIN_SPAN <= end - start <= MAX_SPAN:
+        return None
+    start, end = float(wrap_to_pi(start)), float(wrap_to_pi(end))
+    return replace(arc, start_angle=start, end_angle=end, zero_angle=wrap_angle(start, end), ends_inferred=True)
 
 
 def _wider_boxes(image: np.ndarray, box: Box) -> list[Box]:
@@ -265,8 +285,10 @@ class GaugeReader:
             arc = fit_scale_arc(keypoints, self.crop_size)
         if isinstance(arc, StageFailure):
             result.failure = arc
-            if arc.reason == NUMBERS_OUTSIDE_SCALE and known is None and self.ocr is not None:
-                self._between_numbers(image, crop, keypoints, result, timer)
+            # ends refuted by numbers in their gap, or (with the scale configured) not found at all
+            if self.ocr is not None and (arc.reason == NUMBERS_OUTSIDE_SCALE
+                                         or (known is not None and arc.reason == NO_SCALE_ENDS)):
+                self._between_numbers(image, crop, keypoints, result, timer, known)
             return result
         result.arc = arc
         with timer("needle"):
@@ -354,7 +376,7 @@ class GaugeReader:
         return pivoted, needle, scales
 
     def _between_numbers(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, result: GaugeRead,
-                         timer: _Timer) -> None:
+                         timer: _Timer, known: KnownScale | None = None) -> None:
         """Read a dial refused for numbers in the gap between its scale ends only between the numbers
         read, into ``result``; or leave the refusal standing.
 
@@ -364,25 +386,42 @@ class GaugeReader:
         numbers does not depend on it. So the arc takes the gap's ends (``ends_from_gap``), the scale
         needs :data:`BETWEEN_NUMBERS` agreeing numbers, and the needle must read between the lowest
         and highest of them. The scale's ``min`` and ``max`` are then the values at the ends of the
-        visible arc, not the printed range."""
+        visible arc, not the printed range.
+
+        With a configured scale (``known``) the configured range is the prior the numbers are checked
+        against: :data:`KNOWN_NUMBERS` agreeing numbers suffice, all must lie in the configured range,
+        the needle may read anywhere in it, and the scale takes the configured ends and unit (a dial
+        whose end notches the crop model misses is read so)."""
         with timer("ellipse"):
-            arc = fit_scale_arc(keypoints, self.crop_size, ends_from_gap=True)
+            arc = fit_scale_arc(keypoints, self.crop_size, ends_from_gap=True, gap_clearly=1.0 if known else GAP_CLEARLY_LARGER)
         if isinstance(arc, StageFailure):
             return
         with timer("needle"):
             needle = fit_needle(keypoints.needle_prob, keypoints.stride, arc)
         if isinstance(needle, StageFailure):
             return
-        again = self._read_on(image, crop, keypoints, arc, timer, min_inliers=BETWEEN_NUMBERS)
+        again = self._read_on(image, crop, keypoints, arc, timer,
+                              min_inliers=BETWEEN_NUMBERS if known is None else KNOWN_NUMBERS)
         if again is None:
             return
         read, scales = again
+        agreeing = [m.value for m in scales[0].markers if m.inlier]
+        if known is None:
+            low, high = min(agreeing), max(agreeing)
+        else:
+            low, high = known.min_value, known.max_value
+            if not all(low <= v <= high for v in agreeing):
+                return
+            arc = _arc_at_values(arc, scales[0], low, high)  # the ends where the numbers' line puts the configured range
+            if arc is None:
+                return
+            scales = [replace(scale_from_prior(arc, low, high, known.unit), markers=scales[0].markers,
+                              inliers=scales[0].inliers, rms_value=scales[0].rms_value)]
         with timer("reading"):
             value = read_value(needle, arc, scales[0], self.min_confidence)
         if isinstance(value, StageFailure):
             return
-        agreeing = [m.value for m in scales[0].markers if m.inlier]
-        if not min(agreeing) <= value.value <= max(agreeing):
+        if not low <= value.value <= high:
             return
         result.arc, result.needle, result.scales, result.value, result.failure = arc, needle, scales, value, None
         result.markers, result.units = read

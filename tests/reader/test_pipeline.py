@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import cv2
 import numpy as np
 import pytest
@@ -239,3 +241,38 @@ def test_a_ring_refused_for_its_minor_tick_peaks_is_read_on_the_notches_the_chec
     assert _full_reader(notch_check=False).read_box(image, whole).failure.reason == "poor_fit"
     roi = reader.read_box(image, whole)
     assert roi.failure is None and abs(roi.value.value - gauge["value"]) <= 0.01 * (gauge["max"] - gauge["min"])
+
+
+def test_a_configured_scale_reads_a_dial_whose_end_notches_are_not_found():
+    """The demo's feed-tank-temp (-30..50 degC over about 330 degrees, its gap narrower than a notch
+    step): the crop model misses its end notches and no gap stands out, so the ellipse stage finds no
+    ends. With the scale configured, the ends are where the numbers' line puts -30 and 50."""
+    import json
+
+    from mcap.reader import make_reader
+
+    from gauged.config import load_config
+    from gauged.reader.factory import build_reader
+    from gauged.reader.pipeline import KnownScale
+    from gauged.sources.mcap_source import iter_frames
+
+    repo = Path(__file__).resolve().parents[2]
+    if not packaged_model_path(CROP_MODEL).is_file():
+        pytest.skip(f"gauged/models/{CROP_MODEL} is not shipped")
+    config = load_config(repo / "recordings" / "demo.yaml")
+    gauge = next(g for g in config.gauges if g.id == "feed-tank-temp")
+    with (repo / "recordings" / "demo.mcap").open("rb") as stream:
+        truths = {t["stamp_ns"]: t for t in (json.loads(m.data) for _s, c, m in make_reader(stream).iter_messages()
+                                             if c.topic == "/cam1/truth")}
+    reader = build_reader(config.reader)
+    known = KnownScale(gauge.scale.min, gauge.scale.max, gauge.scale.unit)
+    box = tuple(float(v) for v in gauge.roi)
+    frames = [f for f, _ in zip(iter_frames(repo / "recordings" / "demo.mcap", "/cam1/image"), range(3))]
+    for frame in frames:
+        truth = next(g for g in truths[frame.stamp_ns]["gauges"] if g["gauge"] == gauge.id)
+        unknown = reader.read_box(frame.image, box)
+        assert unknown.failure is not None and unknown.failure.stage == "ellipse"  # no scale ends of its own
+        read = reader.read_box(frame.image, box, known=known)
+        assert read.failure is None, read.failure
+        assert abs(read.value.value - truth["value"]) <= 0.02 * (truth["max"] - truth["min"])
+        assert (read.scale.min_value, read.scale.max_value, read.scale.unit) == (-30.0, 50.0, "degC")

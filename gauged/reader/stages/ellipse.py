@@ -29,7 +29,8 @@ from gauged.types import Ellipse, StageFailure
 STAGE = "ellipse"
 NUMBERS_OUTSIDE_SCALE = "numbers_outside_scale"
 POOR_FIT = "poor_fit"
-REASONS = ("too_few_notches", "degenerate_conic", POOR_FIT, "too_oblique", "no_scale_ends", "implausible_span",
+NO_SCALE_ENDS = "no_scale_ends"
+REASONS = ("too_few_notches", "degenerate_conic", POOR_FIT, "too_oblique", NO_SCALE_ENDS, "implausible_span",
            NUMBERS_OUTSIDE_SCALE)
 
 TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellipse is an outlier
@@ -399,7 +400,7 @@ def _centred_fit(points: np.ndarray, centre: np.ndarray, tol_px: float) -> tuple
 GAP_CLEARLY_LARGER = 1.4  # the scale's gap must exceed the notch spacing by this factor to be recognised
 
 
-def _ends_from_gap(angles: np.ndarray) -> tuple[float, float] | None:
+def _ends_from_gap(angles: np.ndarray, clearly: float = GAP_CLEARLY_LARGER) -> tuple[float, float] | None:
     """Start and end angles around the largest clockwise gap between sorted notch angles.
 
     None when that gap is not clearly larger than the spacing of the notches: on a dial whose gap is
@@ -409,7 +410,7 @@ def _ends_from_gap(angles: np.ndarray) -> tuple[float, float] | None:
     gaps = np.diff(np.concatenate([order, order[:1] + 2 * np.pi]))
     k = int(np.argmax(gaps))
     others = np.delete(gaps, k)
-    if len(others) and gaps[k] < GAP_CLEARLY_LARGER * float(np.median(others)):
+    if len(others) and gaps[k] < clearly * float(np.median(others)):
         return None
     end, start = order[k], order[(k + 1) % len(order)]
     return float(start), float(end)
@@ -433,7 +434,7 @@ def _snap(angle: float, notch_angles: np.ndarray) -> float:
 
 def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4,
                   max_rms_fraction: float = RMS_FRACTION, min_axis_ratio: float = 0.35,
-                  ends_from_gap: bool = False) -> ScaleArc | StageFailure:
+                  ends_from_gap: bool = False, gap_clearly: float = GAP_CLEARLY_LARGER) -> ScaleArc | StageFailure:
     """Fit the scale arc to the crop model's notches (crop pixels). See the module docstring.
 
     Failures: ``too_few_notches`` (fewer than ``min_notches`` notch points), ``degenerate_conic``,
@@ -451,7 +452,9 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
 
     ``ends_from_gap`` takes the ends from the notches' largest gap whatever the end peaks and the
     number peaks in that gap say: for a dial whose ends are hidden, read only between its numbers
-    (the pipeline's look after ``numbers_outside_scale``).
+    (the pipeline's look after ``numbers_outside_scale``). ``gap_clearly`` is how much larger than
+    the notch spacing that gap must be (1: any largest gap; for a configured scale, whose ends the
+    pipeline then takes from the numbers, not from the gap).
     """
     parts = [keypoints.major.points]
     for peaks in (keypoints.start, keypoints.end):
@@ -495,7 +498,7 @@ def fit_scale_arc(keypoints: CropKeypoints, crop_size: int, min_notches: int = 4
     # dial, so the pivot is used only when the view is oblique enough for perspective to matter.
     if ellipse.b / ellipse.a < OBLIQUE_AXIS_RATIO:
         centre = _pivot_inside(keypoints, ellipse) or centre
-    return _arc_about(keypoints, ellipse, points[inliers], rms, rms_limit, centre, ends_from_gap)
+    return _arc_about(keypoints, ellipse, points[inliers], rms, rms_limit, centre, ends_from_gap, gap_clearly)
 
 
 def arc_about_pivot(arc: ScaleArc, keypoints: CropKeypoints) -> ScaleArc | StageFailure | None:
@@ -520,7 +523,8 @@ def _pivot_inside(keypoints: CropKeypoints, ellipse: Ellipse) -> tuple[float, fl
 
 
 def _arc_about(keypoints: CropKeypoints, ellipse: Ellipse, notches: np.ndarray, rms: float, rms_limit: float | None,
-               centre: tuple[float, float], ends_from_gap: bool = False) -> ScaleArc | StageFailure:
+               centre: tuple[float, float], ends_from_gap: bool = False,
+               gap_clearly: float = GAP_CLEARLY_LARGER) -> ScaleArc | StageFailure:
     """The scale arc of the ring ``ellipse`` through its inlier ``notches``, with dial angles measured
     about ``centre``: the ends (found, else inferred from the notches' largest gap) and their checks;
     with ``ends_from_gap``, the gap's ends and no check of the numbers in it."""
@@ -528,10 +532,10 @@ def _arc_about(keypoints: CropKeypoints, ellipse: Ellipse, notches: np.ndarray, 
     inferred = not (found_start and found_end)
     if inferred:
         if len(notches) < GAP_MIN_NOTCHES:
-            return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and too few notches to infer them")
-        ends = _ends_from_gap(dial_angle(ellipse, notches, centre))
+            return StageFailure(STAGE, NO_SCALE_ENDS, "start/end notch missing and too few notches to infer them")
+        ends = _ends_from_gap(dial_angle(ellipse, notches, centre), gap_clearly)
         if ends is None:
-            return StageFailure(STAGE, "no_scale_ends", "start/end notch missing and no gap between the notches "
+            return StageFailure(STAGE, NO_SCALE_ENDS, "start/end notch missing and no gap between the notches "
                                 "stands out as the scale's")
         gap_start, gap_end = ends
     notch_angles = dial_angle(ellipse, notches, centre)
