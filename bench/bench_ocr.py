@@ -30,20 +30,19 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import header, median_s  # noqa: E402
-
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
-
-from gauged.types import Ellipse  # noqa: E402
+from common import header, median_s  # noqa: E402
 
 from gauged.geometry.angles import wrap_angle  # noqa: E402
 from gauged.geometry.dial_frame import dial_angle  # noqa: E402
 from gauged.geometry.ellipse_fit import fit_ellipse  # noqa: E402
+from gauged.reader.ocr.engine import MODEL_SETS, OcrUnavailable, find_model_files  # noqa: E402
+from gauged.reader.ocr.text import crop_quad  # noqa: E402
 from gauged.reader.stages.ellipse import ScaleArc  # noqa: E402
 from gauged.reader.stages.ocr import ScaleTextReader  # noqa: E402
-from gauged.reader.ocr.engine import MODEL_SETS, OcrUnavailable, crop_quad, find_model_files  # noqa: E402
 from gauged.training.dial_renderer import render_crop  # noqa: E402
+from gauged.types import Ellipse  # noqa: E402
 
 
 def cpu_ms(fn, runs: int) -> float:

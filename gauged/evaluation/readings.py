@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gauged.reader.ocr.engine import quad_height
+from gauged.reader.ocr.text import quad_height
 from gauged.types import StageFailure
 
 # Bins (px) of the median printed-number height of an image's main scale as captured, for the

@@ -34,9 +34,9 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from gauged.reader.ocr.engine import crop_quad
 from gauged.reader.ocr.number_net import CHARS, LINE_HEIGHT, LINE_WIDTH, to_line_input
 from gauged.reader.ocr.number_net import greedy_decode as decode_logits
+from gauged.reader.ocr.text import crop_quad
 from gauged.synth.crop import render_crop
 
 log = logging.getLogger(__name__)

@@ -34,10 +34,10 @@ import numpy as np
 from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import normalized_radius
 from gauged.geometry.scale_fit import fit_angle_value
-from gauged.reader.ocr.engine import crop_quad
 from gauged.reader.ocr.number_net import NumberNet
 from gauged.reader.ocr.numbers import parse_number
 from gauged.reader.ocr.regions import NUMBER_BAND
+from gauged.reader.ocr.text import crop_quad
 from gauged.types import ScaleMarker, StageFailure
 
 if TYPE_CHECKING:  # the stages' types, named for the reader only: gauged.reader.ocr imports no stage

@@ -35,8 +35,8 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from gauged.reader.ocr.engine import Recognition
 from gauged.reader.ocr.numbers import ParsedNumber, parse_number
+from gauged.reader.ocr.text import Recognition
 from gauged.types import Box, ScaleMarker, StageFailure
 
 ORIENTATIONS = ("upright", "radial")

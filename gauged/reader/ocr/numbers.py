@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gauged.reader.ocr.engine import TextBox
+from gauged.reader.ocr.text import TextBox
 from gauged.types import ScaleMarker, StageFailure
 
 PITCH = 1.2  # text heights: most between the centres of neighbouring characters of one number

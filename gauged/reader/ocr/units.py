@@ -21,7 +21,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from gauged.reader.ocr.engine import TextBox
+from gauged.reader.ocr.text import TextBox
 from gauged.types import StageFailure
 
 # canonical unit -> spellings seen on dials (lower case after normalise())

@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from gauged.reader.ocr.engine import Recognition, ctc_greedy, ctc_log_likelihood
 from gauged.reader.ocr.likely_scale import RingText, decimals, likely_markers, spellings
+from gauged.reader.ocr.text import Recognition, ctc_greedy, ctc_log_likelihood
 
 CHARS = ("0", "1", "2", "3", "4", "5", "6", "7", "8", "9", ".", ",", "-", "−")
 LABEL = {c: k for k, c in enumerate(CHARS, start=1)}

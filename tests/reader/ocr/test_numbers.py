@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from gauged.reader.ocr.engine import TextBox
 from gauged.reader.ocr.numbers import (
     filter_progression,
     merge_fragments,
     nice_step,
     parse_number,
 )
+from gauged.reader.ocr.text import TextBox
 from gauged.types import ScaleMarker
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gauged.reader.ocr.engine import TextBox
+from gauged.reader.ocr.text import TextBox
 from gauged.reader.ocr.units import match_unit, names_unit, printed_units
 
 

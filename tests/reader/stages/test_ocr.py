@@ -12,16 +12,9 @@ import pytest
 from gauged.geometry.angles import wrap_angle
 from gauged.geometry.dial_frame import dial_angle
 from gauged.geometry.ellipse_fit import fit_ellipse
-from gauged.reader.ocr.engine import (
-    OcrEngine,
-    OcrUnavailable,
-    ctc_greedy,
-    ctc_log_likelihood,
-    db_boxes,
-    find_model_files,
-    order_quad,
-)
+from gauged.reader.ocr.engine import OcrEngine, OcrUnavailable, find_model_files
 from gauged.reader.ocr.numbers import merge_fragments, parse_number
+from gauged.reader.ocr.text import ctc_greedy, ctc_log_likelihood, db_boxes, order_quad
 from gauged.reader.ocr.units import names_unit, printed_units
 from gauged.reader.stages.ellipse import ScaleArc
 from gauged.types import Ellipse, StageFailure
@@ -183,7 +176,7 @@ def test_read_markers_reads_upright_text_of_a_dial_whose_gap_is_not_at_the_botto
     """Numbers printed upright on a face whose scale gap is at the top (synthetic dev 000111): turned
     gap-down, the numbers stand on their heads ("0.8" read "8", "1.6" read "9"); the view the image's
     way up reads them."""
-    import gauged.reader.stages.ocr as ocr
+    import gauged.reader.ocr.rectified as rectified
 
     values = [0, 0.4, 0.8, 1.2, 1.6]
     img, centres = render_dial(values, scale=0.8, unit="", start_deg=315.0)
@@ -198,7 +191,7 @@ def test_read_markers_reads_upright_text_of_a_dial_whose_gap_is_not_at_the_botto
             np.array([(m.box[0] + m.box[2]) / 2, (m.box[1] + m.box[3]) / 2]) - c) < 20 for v, c in zip(values, centres)))
 
     assert right(reader.read_markers(img, arc, centres)) >= 4
-    monkeypatch.setattr(ocr, "UPRIGHT_TURN", math.pi)  # gap-down view only, as before
+    monkeypatch.setattr(rectified, "UPRIGHT_TURN", math.pi)  # gap-down view only, as before
     read = reader.read_markers(img, arc, centres)
     assert isinstance(read, StageFailure) or right(read) < 3
 
@@ -209,9 +202,9 @@ def test_read_markers_keeps_numbers_beyond_an_inferred_gap(reader, monkeypatch):
     ends every number read goes on to the scale stage; with found ends the progression filter runs.
     (In the gap-down view: the view the image's way up, where this dial's gap really is, would read
     every number.)"""
-    import gauged.reader.stages.ocr as ocr
+    import gauged.reader.ocr.rectified as rectified
 
-    monkeypatch.setattr(ocr, "UPRIGHT_TURN", math.pi)
+    monkeypatch.setattr(rectified, "UPRIGHT_TURN", math.pi)
     values = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]
     img, centres = render_dial(values, unit="")
     e = Ellipse(*CIRCLE[:2], CIRCLE[2], CIRCLE[2], 0.0)
@@ -445,8 +438,8 @@ def test_ink_box_tells_a_glyph_of_a_turned_number():
 
 
 def test_split_spaced_cuts_two_numbers_read_as_one_box():
-    from gauged.reader.ocr.engine import TextBox
-    from gauged.reader.stages.ocr import _split_spaced
+    from gauged.reader.ocr.dial_text import _split_spaced
+    from gauged.reader.ocr.text import TextBox
 
     quad = np.float32([[0, 0], [70, 0], [70, 20], [0, 20]])
     parts = _split_spaced([TextBox("200 220", 0.9, quad)])
@@ -459,8 +452,8 @@ def test_dedupe_prefers_a_confident_whole_number_to_its_part_read_alone():
     """The ink box at a hint held only the "5" of a tilted "25" and read it with a higher score than
     the detector's "25" (synthetic dev 000098); the whole number wins. A doubtful long reading
     ("4600" for 40 and 60) or a loose box far larger than the part does not."""
-    from gauged.reader.ocr.engine import TextBox
-    from gauged.reader.stages.ocr import _dedupe
+    from gauged.reader.ocr.dial_text import _dedupe
+    from gauged.reader.ocr.text import TextBox
 
     def box(text, score, x0, y0, x1, y1):
         return TextBox(text, score, np.float32([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
