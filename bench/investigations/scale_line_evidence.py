@@ -1,12 +1,12 @@
 """How far do a reading's own agreeing numbers lie past its scale's fitted ends, and how many are distinct?
 
-    python bench/scale_line_evidence.py --data data/held1000 [--out rows.json] [--top 12]
+    python bench/investigations/scale_line_evidence.py --data data/held1000 [--out rows.json] [--top 12]
 
 Reads every image of a labelled folder (labels.json or labels.jsonl, as ``gauged eval readings``)
 and, for each attempted reading, takes the primary scale's agreeing numbers read as digits: how far
 the farthest lies past an end of the fitted range (as a share of that range), and how many distinct
 values they are, beside the reading's relative error. Session 14 ran it at e89aa88, before
-:mod:`gauged.reader.scale` had its checks ``numbers_past_ends`` and distinct values, on dev300,
+:mod:`gauged.reader.stages.scale` had its checks ``numbers_past_ends`` and distinct values, on dev300,
 fresh300, the held-out 1,000 and the 21 real photos, and chose ``PAST_END`` (0.5) from the rows:
 right readings <= 0.35 past an end, the wild 000516 1.58. At later commits it shows the margin the
 readings that pass keep. An analysis tool: the truth comes from the labels.
@@ -20,12 +20,11 @@ import sys
 from pathlib import Path
 
 import cv2
-import numpy as np
 
 from gauged.config.model import ReaderConfig
 from gauged.evaluation.readings import image_path, load_labels
 from gauged.reader.factory import build_reader
-from gauged.reader.scale import agreeing_digit_values
+from gauged.reader.stages.scale_checks import agreeing_digit_values
 
 
 def evidence(folder: Path, threads: int) -> list[dict]:
