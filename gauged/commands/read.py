@@ -12,8 +12,8 @@ from typing import Any
 import cv2
 
 from gauged.config.model import ReaderConfig
+from gauged.reader.gauge_read import GaugeRead, KnownScale
 from gauged.reader.onnx_model import ModelNotAvailable
-from gauged.reader.pipeline import GaugeRead, KnownScale
 from gauged.types import StageFailure
 
 log = logging.getLogger(__name__)

@@ -17,8 +17,8 @@ import numpy as np
 
 from gauged.alarms.lifecycle import AlarmEvent
 from gauged.config.model import GaugeConfig, ScaleLockConfig
+from gauged.reader.gauge_read import GaugeRead, KnownScale
 from gauged.reader.stages.ellipse import ScaleArc
-from gauged.reader.pipeline import GaugeRead, KnownScale
 from gauged.tracking.scale_lock import ScaleLock
 from gauged.tracking.tracker import GaugeTracker
 from gauged.types import Box, Frame, RawReading, Reading, ScaleModel, StageFailure

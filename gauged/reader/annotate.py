@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from gauged.geometry.dial_frame import point_at_dial_angle
-from gauged.reader.pipeline import GaugeRead
+from gauged.reader.gauge_read import GaugeRead
 
 GREEN, RED, BLUE, YELLOW, WHITE, BLACK = (60, 200, 60), (40, 40, 230), (230, 120, 30), (0, 220, 255), (255, 255, 255), (0, 0, 0)
 

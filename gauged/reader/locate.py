@@ -21,6 +21,8 @@ import numpy as np
 
 from gauged.types import Box, GaugeDetection, StageFailure
 
+GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
+PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a close-up), read again
 CLOSE_UP = 0.35  # a detection covering this share of the image makes it a close-up of one gauge
 
 
@@ -52,3 +54,19 @@ def locate_gauges(detector: Detector | None, image: np.ndarray
     if any(_area(d.box) >= CLOSE_UP * _area(whole) for d in detections):
         return [GaugeDetection(whole, max(d.score for d in detections))], None
     return sorted(detections, key=lambda d: -d.score), None
+
+
+def wider_boxes(image: np.ndarray, box: Box) -> list[Box]:
+    """The larger boxes a located box with no scale ring is read in, in order: a box :data:`GROW`
+    times larger (clipped to the image), the whole image, the whole image with a :data:`PHOTO_MARGIN`
+    around it (as the crop model saw dials in training)."""
+    height, width = image.shape[:2]
+    whole = whole_image(image)
+    m = PHOTO_MARGIN
+    around = (-m * width, -m * height, (1 + m) * width, (1 + m) * height)
+    if tuple(box) == whole:
+        return [around]
+    cx, cy = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
+    half = GROW * max(box[2] - box[0], box[3] - box[1]) / 2
+    grown = (max(0.0, cx - half), max(0.0, cy - half), min(float(width), cx + half), min(float(height), cy + half))
+    return [b for b in (grown, whole, around) if b != tuple(box)]

@@ -9,15 +9,20 @@ picture or a scale lock can use them. A known scale (configured prior or a locke
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field, replace
-from typing import Protocol
+from dataclasses import replace
 
 import numpy as np
 
-from gauged.geometry.angles import wrap_angle, wrap_to_pi
-from gauged.reader.failures import OCR_UNAVAILABLE, STAGE_ORDER
-from gauged.reader.locate import locate_gauges, whole_image
+from gauged.reader.failures import OCR_UNAVAILABLE
+from gauged.reader.gauge_read import (
+    GaugeRead,
+    KnownScale,
+    MarkersRead,
+    ScaleTextReader,
+    _progress,
+    _Timer,
+)
+from gauged.reader.locate import locate_gauges, whole_image, wider_boxes
 from gauged.reader.ocr.hint_numbers import MIN_NUMBERS as MIN_HINT_NUMBERS
 from gauged.reader.ocr.units import PrintedUnit
 from gauged.reader.onnx_model import OnnxModel, to_model_input
@@ -25,8 +30,6 @@ from gauged.reader.stages.crop import Crop, crop_gauge
 from gauged.reader.stages.detect import GaugeDetector
 from gauged.reader.stages.ellipse import (
     GAP_CLEARLY_LARGER,
-    MAX_SPAN,
-    MIN_SPAN,
     NO_SCALE_ENDS,
     NUMBERS_OUTSIDE_SCALE,
     POOR_FIT,
@@ -38,167 +41,27 @@ from gauged.reader.stages.keypoints import CropKeypoints, Peaks, decode_crop_map
 from gauged.reader.stages.needle import NeedleReading, fit_needle
 from gauged.reader.stages.notch_check import NotchCheck
 from gauged.reader.stages.ocr import NO_NUMBERS
-from gauged.reader.stages.reading import Value, read_value, value_on
-from gauged.reader.stages.scale import fit_scales, scale_from_prior
-from gauged.types import Box, ScaleMarker, ScaleModel, StageFailure
+from gauged.reader.stages.reading import read_value
+from gauged.reader.stages.scale import (
+    across_zero,
+    arc_at_values,
+    fit_scales,
+    primary_first,
+    scale_from_prior,
+)
+from gauged.types import Box, ScaleModel, StageFailure
 
 DETAIL_SIZE = 640  # px: the largest square the OCR samples its rectified view from
 DETAIL_GAIN = 1.25  # use the frame's pixels for OCR when they hold this much more detail than the crop
 NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
-GROW = 5.0  # a detection whose box holds no scale ring is read again in a box this many times larger
 SECOND_LOOK = ("ocr", "scale")  # refusals of these stages (ocr: only no_numbers) get ScaleTextReader.reread_markers
 BETWEEN_NUMBERS = 4  # agreeing numbers a dial with hidden ends needs, the needle between them
 KNOWN_NUMBERS = 3  # ... and with its scale configured, the needle anywhere in the configured range
-PHOTO_MARGIN = 0.06  # of the photo's sides: added around a photo read whole (a close-up), read again
-
-
-def _arc_at_values(arc: ScaleArc, scale: ScaleModel, low: float, high: float) -> ScaleArc | None:
-    """``arc`` with its ends moved to the dial angles where ``scale``'s line gives ``low`` and ``high``
-    (a configured range), or None when that span is implausible."""
-    if scale.slope == 0:
-        return None
-    start, end = ((v - scale.intercept) / scale.slope for v in (low, high))
-    if scale.slope < 0:
-        start, end = end, start  # the arc's ends run clockwise; the values then fall
-    if not MIN_SPAN <= end - start <= MAX_SPAN:
-        return None
-    start, end = float(wrap_to_pi(start)), float(wrap_to_pi(end))
-    return replace(arc, start_angle=start, end_angle=end, zero_angle=wrap_angle(start, end), ends_inferred=True)
-
-
-def _wider_boxes(image: np.ndarray, box: Box) -> list[Box]:
-    """The larger boxes a located box with no scale ring is read in, in order: a box :data:`GROW`
-    times larger (clipped to the image), the whole image, the whole image with a :data:`PHOTO_MARGIN`
-    around it (as the crop model saw dials in training)."""
-    height, width = image.shape[:2]
-    whole = whole_image(image)
-    m = PHOTO_MARGIN
-    around = (-m * width, -m * height, (1 + m) * width, (1 + m) * height)
-    if tuple(box) == whole:
-        return [around]
-    cx, cy = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
-    half = GROW * max(box[2] - box[0], box[3] - box[1]) / 2
-    grown = (max(0.0, cx - half), max(0.0, cy - half), min(float(width), cx + half), min(float(height), cy + half))
-    return [b for b in (grown, whole, around) if b != tuple(box)]
 
 
 def _sure_numbers(numbers: Peaks) -> np.ndarray:
     """(N, 2) crop px: the number-centre peaks confident enough to check a scale's number grid."""
     return numbers.points[numbers.scores >= NUMBER_SURE]
-
-
-def _primary_first(scales: list[ScaleModel], primary_unit: str | None) -> None:
-    """Put the scale in ``primary_unit`` first (in place) when a dial has more than one."""
-    if primary_unit and len(scales) > 1:
-        scales.sort(key=lambda s: s.unit != primary_unit)
-
-
-def _progress(read: "GaugeRead") -> int:
-    """How far a read got: the index of its failing stage in :data:`STAGE_ORDER`, past the end when read."""
-    if read.failure is None:
-        return len(STAGE_ORDER)
-    return STAGE_ORDER.index(read.failure.stage) if read.failure.stage in STAGE_ORDER else 0
-
-
-MarkersRead = tuple[list[ScaleMarker], tuple[PrintedUnit, ...]]  # the OCR stage's numbers and the units printed
-
-
-class ScaleTextReader(Protocol):
-    """The OCR stage as the pipeline sees it (implemented in :mod:`gauged.reader.stages.ocr`)."""
-
-    def read_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
-                     ) -> MarkersRead | StageFailure:
-        """Scale numbers (crop pixels, parsed values) and the units printed on the dial, or a failure
-        of stage ``ocr``.
-        ``detail`` is the crop's region at a higher resolution, for the text to be read from."""
-
-    def reread_markers(self, crop: np.ndarray, arc: ScaleArc, hints: np.ndarray, detail: np.ndarray | None = None
-                       ) -> list[ScaleMarker] | None:
-        """A second look after the scale stage refused ``read_markers``' numbers: other markers, or None."""
-
-    @property
-    def has_number_net(self) -> bool:
-        """Whether the number net is there (:meth:`hint_markers` and the retry need it)."""
-
-    def hint_markers(self, frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks) -> list[ScaleMarker] | None:
-        """A last look: the numbers the number net reads at the number peaks, or None."""
-
-
-@dataclass(frozen=True)
-class KnownScale:
-    """A scale that needs no OCR: a configured prior (``min``/``max``/``unit``) or a locked scale."""
-
-    min_value: float
-    max_value: float
-    unit: str | None
-
-
-@dataclass
-class GaugeRead:
-    """Everything the pipeline learnt about one gauge in one image; ``failure`` is set when it refused."""
-
-    box: Box
-    score: float
-    crop: Crop | None = None
-    keypoints: CropKeypoints | None = None
-    arc: ScaleArc | None = None
-    needle: NeedleReading | None = None
-    markers: list[ScaleMarker] = field(default_factory=list)
-    scales: list[ScaleModel] = field(default_factory=list)
-    units: tuple[PrintedUnit, ...] = ()  # the units read on the dial, best first
-    value: Value | None = None
-    failure: StageFailure | None = None
-    seconds: dict[str, float] = field(default_factory=dict)
-
-    @property
-    def scale(self) -> ScaleModel | None:
-        return self.scales[0] if self.scales else None
-
-    @property
-    def other_readings(self) -> list[tuple[float, ScaleModel]]:
-        """The needle's value on each of the dial's other scales (a dual-scale dial's inner one, in its
-        own unit) with that scale, when the dial was read."""
-        if self.value is None or self.needle is None or self.arc is None:
-            return []
-        return [(value_on(self.needle, self.arc, scale), scale) for scale in self.scales[1:]]
-
-    @property
-    def unit(self) -> str | None:
-        """The primary scale's unit; without a scale, the unit read best on the dial."""
-        if self.scales:
-            return self.scales[0].unit
-        return self.units[0].unit if self.units else None
-
-
-class _Timer:
-    """Per-stage wall time for metrics and benchmarks; never feeds a result."""
-
-    def __init__(self, sink: dict[str, float]):
-        self.sink = sink
-
-    def __call__(self, stage: str):
-        return _Span(self.sink, stage)
-
-
-class _Span:
-    def __init__(self, sink: dict[str, float], stage: str):
-        self.sink, self.stage = sink, stage
-
-    def __enter__(self) -> None:
-        self.start = time.perf_counter()
-
-    def __exit__(self, *exc: object) -> None:
-        self.sink[self.stage] = self.sink.get(self.stage, 0.0) + time.perf_counter() - self.start
-
-
-RETRY_ZERO_MARGIN = 0.05  # of the span: a fitted end this far past zero is on the other side of it
-
-
-def _across_zero(scale: ScaleModel) -> bool:
-    """Whether ``scale`` runs from clearly below zero to clearly above it (a fit's 0 end lands a
-    little off zero: -0.28 on a 0..300 dial)."""
-    margin = RETRY_ZERO_MARGIN * (scale.max_value - scale.min_value)
-    return scale.min_value < -margin and scale.max_value > margin
 
 
 class GaugeReader:
@@ -237,7 +100,7 @@ class GaugeReader:
         """Read the gauge inside ``box`` (frame pixels) of (H, W, 3) uint8 BGR ``image``.
 
         A configured ROI is read as given. A ``located`` box (:mod:`gauged.reader.locate`) that holds
-        no scale ring is read again in larger boxes (:meth:`_wider_boxes`): the detector sometimes
+        no scale ring is read again in larger boxes (:func:`gauged.reader.locate.wider_boxes`): the detector sometimes
         boxes only the hub, the upper face or a printed number of a dial that fills the view, and a
         photo cut to its dial runs past the dial's notches. The first wider read that finds a ring is
         kept, else the read that got furthest. A ring refused for its notch fit gets the notch check's
@@ -248,7 +111,7 @@ class GaugeReader:
         # (an image read whole that shows no notch at all is no dial, not a dial cut by the image's edges)
         stages = ("ellipse",) if tuple(box) == whole_image(image) else ("crop", "keypoints", "ellipse")
         if located and read.arc is None and read.failure is not None and read.failure.stage in stages:
-            for wider in _wider_boxes(image, box):
+            for wider in wider_boxes(image, box):
                 again = self._read_once(image, wider, score, known, primary_unit)
                 if again.arc is not None:
                     read = again
@@ -303,7 +166,7 @@ class GaugeReader:
             if pivoted is not None:
                 arc, needle, scales = pivoted
                 result.arc, result.needle = arc, needle
-                _primary_first(scales, primary_unit)
+                primary_first(scales, primary_unit)
         if isinstance(scales, StageFailure):
             result.failure = scales
             return result
@@ -412,7 +275,7 @@ class GaugeReader:
             low, high = known.min_value, known.max_value
             if not all(low <= v <= high for v in agreeing):
                 return
-            arc = _arc_at_values(arc, scales[0], low, high)  # the ends where the numbers' line puts the configured range
+            arc = arc_at_values(arc, scales[0], low, high)  # the ends where the numbers' line puts the configured range
             if arc is None:
                 return
             scales = [replace(scale_from_prior(arc, low, high, known.unit), markers=scales[0].markers,
@@ -451,7 +314,7 @@ class GaugeReader:
             return None
         with timer("scale"):
             scales = fit_scales(arc, again[0], again[1], hints=hints)
-        if isinstance(scales, StageFailure) or _across_zero(scales[0]):
+        if isinstance(scales, StageFailure) or across_zero(scales[0]):
             return None
         return again, scales
 
@@ -470,7 +333,7 @@ class GaugeReader:
             return None
         with timer("scale"):
             scales = fit_scales(arc, markers, units, min_inliers=MIN_HINT_NUMBERS, hints=hints)
-        if isinstance(scales, StageFailure) or _across_zero(scales[0]):
+        if isinstance(scales, StageFailure) or across_zero(scales[0]):
             return None
         result.markers, result.units = markers, units
         return scales
@@ -554,5 +417,5 @@ class GaugeReader:
                 scales = counter
         if isinstance(scales, StageFailure):
             return scales
-        _primary_first(scales, primary_unit)
+        primary_first(scales, primary_unit)
         return scales

@@ -19,12 +19,12 @@ import zenoh
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
-from gauged.daemon.app import Daemon
 from gauged.commands.replay import batch_config
 from gauged.config import parse_config
-from gauged.reader.pipeline import GaugeRead
-from gauged.reader.stages.reading import Value
+from gauged.daemon.app import Daemon
+from gauged.reader.gauge_read import GaugeRead
 from gauged.reader.ocr.units import PrintedUnit
+from gauged.reader.stages.reading import Value
 from gauged.types import StageFailure
 
 BASE_NS = 1_700_000_000_000_000_000

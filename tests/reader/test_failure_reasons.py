@@ -18,7 +18,8 @@ from gauged.config.model import GaugeConfig, ScaleLockConfig
 from gauged.daemon.gauge_runner import GaugeRunner
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.failures import failure_pairs
-from gauged.reader.pipeline import GaugeReader, KnownScale
+from gauged.reader.gauge_read import KnownScale
+from gauged.reader.pipeline import GaugeReader
 from gauged.reader.stages.crop import MIN_GAUGE_PX, Crop, crop_gauge
 from gauged.reader.stages.detect import GaugeDetector
 from gauged.reader.stages.ellipse import fit_scale_arc

@@ -10,9 +10,10 @@ import pytest
 
 from gauged.commands.read import record
 from gauged.reader.factory import CROP_MODEL
+from gauged.reader.locate import GROW
 from gauged.reader.ocr.units import UNIT_SIZE
 from gauged.reader.onnx_model import OnnxModel, packaged_model_path
-from gauged.reader.pipeline import GROW, GaugeReader
+from gauged.reader.pipeline import GaugeReader
 from gauged.reader.stages.scale import fit_scales
 from gauged.synth.crop import render_crop
 from gauged.types import GaugeDetection, StageFailure
@@ -80,7 +81,7 @@ def test_a_photo_the_dial_runs_past_is_read_again_with_a_margin():
     """A dial cut by the photo's edges, where the detector finds nothing: read whole, too few of its
     notches lie on one ring; read with a margin around the photo (as the crop model saw dials in
     training), the ring is found (a real 0..10 dial of the dev set is read so, within 0.6%)."""
-    from gauged.reader.pipeline import PHOTO_MARGIN
+    from gauged.reader.locate import PHOTO_MARGIN
 
     path = packaged_model_path(CROP_MODEL)
     if not path.is_file():
@@ -253,7 +254,7 @@ def test_a_configured_scale_reads_a_dial_whose_end_notches_are_not_found():
 
     from gauged.config import load_config
     from gauged.reader.factory import build_reader
-    from gauged.reader.pipeline import KnownScale
+    from gauged.reader.gauge_read import KnownScale
     from gauged.sources.mcap_source import iter_frames
 
     repo = Path(__file__).resolve().parents[2]

@@ -49,9 +49,8 @@ TURN_TOLERANCE = math.radians(6.0)  # dial angle: how near a number a turn on mu
 TURN_STEPS = 2.5  # ... and how many of the agreeing numbers' steps past the fitted ends its value may be
 
 
-# session 22: 0.5, 1, 2 gave 300 renders a mean error of 0.327, 0.329, 0.330%, the 21 real photos 0.55, 0.50, 0.46%)
 PAST_END = 0.5  # of the fitted range: an agreeing number this far past a scale end refutes the fit (1,308 reads
-# of dev300, fresh300, held-out and the 21 real photos: right ones <= 0.35, the wild 000516 1.58)
+# of the synthetic dev, fresh and held-out sets and the 21 real photos: right ones <= 0.35, the one wild read 1.58)
 
 
 def agreeing_digit_values(model: ScaleModel) -> list[float]:

@@ -11,7 +11,7 @@ from gauged.reader.factory import NUMBER_NET_MODEL, build_reader
 from gauged.reader.ocr.number_net import CHARS, NumberNet, greedy_decode, to_line_input
 from gauged.reader.ocr.text import crop_quad
 from gauged.reader.onnx_model import packaged_model_path
-from gauged.reader.pipeline import _across_zero
+from gauged.reader.stages.scale import _across_zero
 from gauged.synth.crop import render_crop
 from gauged.synth.dataset import render_item
 from gauged.types import Ellipse, ScaleModel

@@ -9,7 +9,6 @@ from gauged.geometry.angles import angle_difference, unwrap, wrap_angle, wrap_to
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.stages.ellipse import ScaleArc, fit_scale_arc, notch_grid
 from gauged.types import Ellipse, StageFailure
-
 from tests.reader.dial_maps import CROP, Dial, keypoints_for
 
 

@@ -15,7 +15,6 @@ from gauged.reader.ocr.units import PrintedUnit
 from gauged.reader.stages.ellipse import fit_scale_arc
 from gauged.reader.stages.scale import fit_scales, with_round_ends
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
-
 from tests.reader.dial_maps import CROP, Dial, keypoints_for
 
 
