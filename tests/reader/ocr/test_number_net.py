@@ -11,7 +11,7 @@ from gauged.reader.factory import NUMBER_NET_MODEL, build_reader
 from gauged.reader.ocr.number_net import CHARS, NumberNet, greedy_decode, to_line_input
 from gauged.reader.ocr.text import crop_quad
 from gauged.reader.onnx_model import packaged_model_path
-from gauged.reader.stages.scale import _across_zero
+from gauged.reader.stages.scale import across_zero
 from gauged.synth.crop import render_crop
 from gauged.synth.dataset import render_item
 from gauged.types import Ellipse, ScaleModel
@@ -57,9 +57,9 @@ def test_a_retried_scale_across_zero_is_not_trusted():
     def scale(lo, hi):
         return ScaleModel(Ellipse(0, 0, 1, 1, 0), 1.0, 0.0, 0.0, lo, hi, None, 3, 0.0, ())
 
-    assert _across_zero(scale(-0.6, 0.4))  # "-0.5", "-0.2" read without their minus signs
-    assert not _across_zero(scale(-0.28, 300.0))  # a fitted 0 end lands a little off zero
-    assert not _across_zero(scale(-1.0, 0.02)) and not _across_zero(scale(-30.0, 0.0))
+    assert across_zero(scale(-0.6, 0.4))  # "-0.5", "-0.2" read without their minus signs
+    assert not across_zero(scale(-0.28, 300.0))  # a fitted 0 end lands a little off zero
+    assert not across_zero(scale(-1.0, 0.02)) and not across_zero(scale(-30.0, 0.0))
 
 
 def _held_out(index: int) -> tuple[np.ndarray, dict]:
