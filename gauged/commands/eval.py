@@ -80,12 +80,13 @@ def run_readings(args: argparse.Namespace) -> int:
     done = {"images": 0, "failed": 0}
 
     def read(label):
-        value, failure, unit = read_one(label)
+        outcome = read_one(label)
+        value = outcome[0]
         done["images"] += 1
         done["failed"] += value is None
         if done["images"] % PROGRESS_EVERY == 0 or done["images"] == len(labels):
             log.info("read %d/%d images, %d refused", done["images"], len(labels), done["failed"])
-        return value, failure, unit
+        return outcome
 
     def read_one(label):
         image = cv2.imread(str(image_path(args.data, label)), cv2.IMREAD_COLOR)
@@ -95,7 +96,9 @@ def run_readings(args: argparse.Namespace) -> int:
         if isinstance(reads, StageFailure):
             return None, reads, None
         best = reads[0]
-        return (best.value.value, None, best.unit) if best.value is not None else (None, best.failure, None)
+        if best.value is None:
+            return None, best.failure, None
+        return best.value.value, None, best.unit, best.value.confidence
 
     result = report(evaluate(labels, read))
     print(json.dumps(result, indent=1) if args.json else format_table(result))

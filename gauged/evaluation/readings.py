@@ -57,6 +57,7 @@ class Outcome:
     value: float | None
     failure: StageFailure | None
     unit: str | None = None  # the unit the reader gave the reading
+    confidence: float | None = None  # the reader's confidence in the reading
 
     @property
     def relative_error(self) -> float | None:
@@ -141,7 +142,8 @@ def summarize(outcomes: list[Outcome]) -> Summary:
 
 
 def evaluate(labels: list[Label], read: Callable[[Label], tuple]) -> list[Outcome]:
-    """Outcomes of ``read(label)``: ``(value, failure)`` or ``(value, failure, unit)``."""
+    """Outcomes of ``read(label)``: ``(value, failure)``, ``(value, failure, unit)`` or
+    ``(value, failure, unit, confidence)``."""
     return [Outcome(label, *read(label)) for label in labels]
 
 
@@ -152,6 +154,24 @@ def unit_counts(outcomes: list[Outcome]) -> dict[str, int]:
     right = sum(o.unit == o.label.unit for o in read)
     none = sum(o.unit is None for o in read)
     return {"labelled": len(read), "right": right, "wrong": len(read) - right - none, "none": none}
+
+
+RIGHT_WITHIN = 0.02  # of the span: a reading this close is right, for the confidence's ROC
+WRONG_BEYOND = 0.05  # ... and one this far off is wrong (readings between are left out)
+
+
+def confidence_auc(outcomes: list[Outcome]) -> dict:
+    """How well the reader's confidence separates right readings (within :data:`RIGHT_WITHIN` of the
+    span) from wrong ones (off by more than :data:`WRONG_BEYOND`): the area under the ROC curve, the
+    chance that a right reading has the higher confidence (ties count half). None without both kinds."""
+    scored = [o for o in outcomes if o.value is not None and o.confidence is not None]
+    right = np.array([o.confidence for o in scored if o.relative_error <= RIGHT_WITHIN], float)
+    wrong = np.array([o.confidence for o in scored if o.relative_error > WRONG_BEYOND], float)
+    auc = None
+    if len(right) and len(wrong):
+        auc = float(((right[:, None] > wrong[None, :]).sum() + 0.5 * (right[:, None] == wrong[None, :]).sum())
+                    / (len(right) * len(wrong)))
+    return {"right": len(right), "wrong": len(wrong), "auc": auc}
 
 
 def _height_bin(low: float, high: float) -> str:
@@ -168,8 +188,10 @@ def report(outcomes: list[Outcome]) -> dict:
         "images": [{"image": o.label.image, "truth": o.label.reading, "value": o.value,
                     "relative_error": o.relative_error, "number_px": o.label.number_px,
                     "captured_number_px": o.label.captured_number_px, "unit": o.unit, "true_unit": o.label.unit,
+                    "confidence": o.confidence,
                     "failure": None if o.failure is None else o.failure.to_dict()} for o in outcomes],
     }
+    result["confidence"] = confidence_auc(outcomes)
     if any(o.label.unit is not None for o in outcomes):
         result["units"] = unit_counts(outcomes)
     if any(o.label.number_px is not None for o in outcomes):
@@ -191,6 +213,10 @@ def format_table(result: dict) -> str:
         u = result["units"]
         lines.append(f"units of the {u['labelled']} readings of dials printing theirs: {u['right']} right, "
                      f"{u['wrong']} wrong, {u['none']} none")
+    c = result.get("confidence")
+    if c and c["auc"] is not None:
+        lines.append(f"confidence: ROC AUC {c['auc']:.3f} separating {c['right']} readings within "
+                     f"{RIGHT_WITHIN:.0%} from {c['wrong']} off by more than {WRONG_BEYOND:.0%}")
     reasons = result["all"]["failures_by_reason"]
     if reasons:
         lines.append("failures: " + ", ".join(f"{k} {v}" for k, v in reasons.items()))

@@ -79,3 +79,18 @@ def test_units_of_readings_are_counted_where_the_dial_prints_its_unit(tmp_path):
     assert "1 wrong" in format_table(result)
     result = report(evaluate(labels[:1], lambda label: (None, StageFailure("ocr", "no_text"))))
     assert result["units"] == {"labelled": 0, "right": 0, "wrong": 0, "none": 0}
+
+
+def test_confidence_auc_ranks_right_readings_above_wrong_ones():
+    import pytest
+
+    from gauged.evaluation.readings import Label, Outcome, confidence_auc
+
+    label = Label("x.jpg", reading=50.0, min=0.0, max=100.0)
+    right = [Outcome(label, 50.5, None, None, c) for c in (0.9, 0.8, 0.7)]  # 0.5% off
+    wrong = [Outcome(label, 80.0, None, None, c) for c in (0.6, 0.75)]  # 30% off
+    middle = [Outcome(label, 53.0, None, None, 0.1)]  # 3% off: neither, left out
+    result = confidence_auc(right + wrong + middle)
+    assert (result["right"], result["wrong"]) == (3, 2)
+    assert result["auc"] == pytest.approx(5 / 6)  # 0.7 loses to 0.75 only
+    assert confidence_auc(right)["auc"] is None
