@@ -12,7 +12,8 @@ import numpy as np
 from gauged.geometry.rectify import (
     unrectify_points,
 )
-from gauged.reader.ocr.numbers import filter_progression, merge_fragments, parse_number
+from gauged.reader.ocr.fragments import merge_fragments
+from gauged.reader.ocr.numbers import filter_progression, parse_number
 from gauged.reader.ocr.regions import RING, ink_box
 from gauged.reader.ocr.text import TextBox
 from gauged.reader.ocr.units import (

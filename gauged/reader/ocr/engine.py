@@ -309,9 +309,7 @@ class OcrEngine:
         """Each line PP-OCR read digits in, read by the number net too; where the net reads a number,
         its string becomes the line's digits (and its text, when that held a digit). The scores and
         ``digit_logp`` stay PP-OCR's."""
-        from gauged.reader.ocr.numbers import (
-            parse_number,  # numbers imports this module's TextBox
-        )
+        from gauged.reader.ocr.numbers import parse_number  # numbers imports the engine's text types
 
         out = []
         for rec, net_text in zip(read, self.number_net.read(lines), strict=True):

@@ -7,12 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from gauged.reader.ocr.numbers import (
-    filter_progression,
-    merge_fragments,
-    nice_step,
-    parse_number,
-)
+from gauged.reader.ocr.fragments import merge_fragments
+from gauged.reader.ocr.numbers import filter_progression, nice_step, parse_number
 from gauged.reader.ocr.text import TextBox
 from gauged.types import ScaleMarker
 

@@ -13,7 +13,8 @@ from gauged.geometry.angles import wrap_angle
 from gauged.geometry.dial_frame import dial_angle
 from gauged.geometry.ellipse_fit import fit_ellipse
 from gauged.reader.ocr.engine import OcrEngine, OcrUnavailable, find_model_files
-from gauged.reader.ocr.numbers import merge_fragments, parse_number
+from gauged.reader.ocr.fragments import merge_fragments
+from gauged.reader.ocr.numbers import parse_number
 from gauged.reader.ocr.text import ctc_greedy, ctc_log_likelihood, db_boxes, order_quad
 from gauged.reader.ocr.units import names_unit, printed_units
 from gauged.reader.stages.ellipse import ScaleArc
