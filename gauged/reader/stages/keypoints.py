@@ -19,6 +19,7 @@ from gauged.types import StageFailure
 
 STAGE = "keypoints"
 REASONS = ("no_notches",)
+NUMBER_SURE = 0.5  # number-centre peaks above this score check the scale's number grid
 CROP_CHANNELS = ("start", "end", "major", "tip", "pivot", "numbers", "needle")
 
 
@@ -121,3 +122,8 @@ def decode_crop_maps(logits: np.ndarray, crop_size: int, threshold: float = 0.3,
         return StageFailure(STAGE, "no_notches", "the crop model found no scale notch above threshold")
     return CropKeypoints(start=single["start"], end=single["end"], major=major, tip=single["tip"],
                          pivot=single["pivot"], numbers=numbers, needle_prob=maps["needle"], stride=stride)
+
+
+def sure_numbers(numbers: Peaks) -> np.ndarray:
+    """(N, 2) crop px: the number-centre peaks confident enough to check a scale's number grid."""
+    return numbers.points[numbers.scores >= NUMBER_SURE]
