@@ -46,6 +46,7 @@ GRID_OFF_SHARE = 0.3  # more than this share of them between grid lines refutes 
 ROUND_END = 0.25  # of the number step: how near whole multiples the numbers' line must put both scale ends
 END_WEIGHT = 2.0  # how many numbers each end counts as in the line fitted again through them (0.5, 1, 2 gave
 # 300 dev renders a mean error of 0.327, 0.329, 0.330%, the 21 real photos 0.55, 0.50, 0.46%)
+CLEARLY_MORE = 2  # distinct agreeing numbers by which a counter-clockwise line must beat a clockwise one
 RETRY_ZERO_MARGIN = 0.05  # of the span: a fitted end this far past zero is on the other side of it
 
 
@@ -220,6 +221,22 @@ def _from_ring(model: ScaleModel, ring: list[ScaleMarker]) -> int:
 
 
 def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int = 1) -> ScaleModel | StageFailure:
+    model = _checked_ring(arc, ring, min_inliers, direction)
+    if direction > 0 and not isinstance(model, StageFailure):
+        # The numbers may rise the other way: a tick read as a minus ("-1.4" beside a "1.4") can make
+        # three numbers of a counter-clockwise dial agree on a clockwise line. The direction with
+        # clearly more distinct agreeing numbers wins; clockwise keeps a near tie.
+        counter = _checked_ring(arc, ring, min_inliers, -1)
+        if not isinstance(counter, StageFailure) and _support(counter) >= _support(model) + CLEARLY_MORE:
+            return counter
+    return model
+
+
+def _support(model: ScaleModel) -> int:
+    return len(set(agreeing_digit_values(model)))
+
+
+def _checked_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int) -> ScaleModel | StageFailure:
     model = fit_scale_model(arc.ellipse, ring, arc.start_angle, arc.end_angle, centre=arc.centre,
                             min_inliers=min(min_inliers, max(2, len(ring))), expected_sign=direction)
     if isinstance(model, StageFailure):
