@@ -66,12 +66,15 @@ class _Observed:
 @contextmanager
 def observing_lines() -> Iterator[_Observed]:
     """Note every line the reader's OCR recognises, with its quad mapped back to the frame."""
+    import gauged.reader.ocr.dial_reader as dial_reader
     import gauged.reader.ocr.engine as engine
+    import gauged.reader.ocr.text as text
     import gauged.reader.pipeline as pipeline
     import gauged.reader.stages.ocr as ocr
 
     seen = _Observed()
-    crop_gauge, rectified, crop_quad, recognize = pipeline.crop_gauge, ocr._rectified, ocr.crop_quad, engine.OcrEngine.recognize
+    crop_gauge, rectified, crop_quad, recognize = pipeline.crop_gauge, ocr._rectified, text.crop_quad, engine.OcrEngine.recognize
+    cutters = (ocr, dial_reader)  # the modules that cut lines out of a rectified dial
 
     def noted_crop(image, box, size, pad=0.08):
         crop = crop_gauge(image, box, size, pad)
@@ -101,11 +104,15 @@ def observing_lines() -> Iterator[_Observed]:
                 seen.readings.setdefault(engine._line_key(line), reading)
         return out
 
-    pipeline.crop_gauge, ocr._rectified, ocr.crop_quad, engine.OcrEngine.recognize = noted_crop, noted_view, noted_line, noted_recognize
+    pipeline.crop_gauge, ocr._rectified, engine.OcrEngine.recognize = noted_crop, noted_view, noted_recognize
+    for module in cutters:
+        module.crop_quad = noted_line
     try:
         yield seen
     finally:
-        pipeline.crop_gauge, ocr._rectified, ocr.crop_quad, engine.OcrEngine.recognize = crop_gauge, rectified, crop_quad, recognize
+        pipeline.crop_gauge, ocr._rectified, engine.OcrEngine.recognize = crop_gauge, rectified, recognize
+        for module in cutters:
+            module.crop_quad = crop_quad
 
 
 def _height(quad: np.ndarray) -> float:

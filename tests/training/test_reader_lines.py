@@ -46,12 +46,13 @@ def test_lines_of_a_render_are_labelled_with_its_printed_numbers(tmp_path):
                            "--count", "3", "--seed", "5000300", "--out", str(tmp_path / "renders")],
                           capture_output=True, text=True, timeout=300)
     assert made.returncode == 0, made.stderr
+    import gauged.reader.ocr.dial_reader as dial_reader
     import gauged.reader.stages.ocr as ocr
 
     before = ocr.crop_quad
     seen = []
     why = write_reader_lines(tmp_path / "renders", tmp_path / "lines.npz", workers=1, progress=seen.append)
-    assert ocr.crop_quad is before  # the reader is observed only inside observing_lines
+    assert ocr.crop_quad is before and dial_reader.crop_quad is before  # the reader is observed only inside observing_lines
     lines = np.load(tmp_path / "lines.npz")
     records = [json.loads(line) for line in (tmp_path / "renders" / "labels.jsonl").read_text().splitlines()]
     printed = {r["image"]: {n["text"] for g in r["gauges"] for s in g["scales"] for n in s["numbers"]} for r in records}
