@@ -1,6 +1,6 @@
 """How far the crop model's start and end notches lie from the labelled ones, in the pixels the camera captured.
 
-    python bench/end_misses.py --shard data/synth-val-256 [--model gauged/models/crop.onnx]
+    python bench/investigations/end_misses.py --shard data/synth-val-256 [--model gauged/models/crop.onnx]
 
 ``--shard`` is a crop shard of the synthetic engine (`python -m gauged.training.prerender crops
 --seed 1000000 --count 500 --size 256 --out data/synth-val-256`, the held-out crops `gauged eval
@@ -18,14 +18,13 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
+import numpy as np  # noqa: E402
 from common import header  # noqa: E402
 
-import numpy as np  # noqa: E402
-
 from gauged.evaluation.models import render_scale  # noqa: E402
-from gauged.reader.keypoints import decode_crop_maps  # noqa: E402
 from gauged.reader.onnx_model import OnnxModel, to_model_input  # noqa: E402
+from gauged.reader.stages.keypoints import decode_crop_maps  # noqa: E402
 from gauged.training.shards import open_crop_shard  # noqa: E402
 
 CAPTURED_STEPS = (0.5, 1.0, 1.5, 2.0, 3.0)

@@ -1,6 +1,6 @@
 """What the needle IoU line could get from the output grid, from flips, and from averaging crop models.
 
-    python bench/needle_combos.py [--models gauged/models/crop.onnx runs/crop-r1/crop.onnx ...]
+    python bench/investigations/needle_combos.py [--models gauged/models/crop.onnx runs/crop-r1/crop.onnx ...]
 
 On the needle-polygons ``valid`` photos (and, where a choice would be made, on every third photo of
 ``train``, one copy per source photo), each photo given whole to the crop model as ``gauged eval
@@ -19,11 +19,10 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import header  # noqa: E402
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
+from common import header  # noqa: E402
 
 from gauged.evaluation.model_metrics import mask_iou, needle_mask_at  # noqa: E402
 from gauged.evaluation.models import whole_photo_needle_logits  # noqa: E402

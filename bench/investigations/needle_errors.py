@@ -1,6 +1,6 @@
 """Where a crop model's needle mask IoU is lost on the needle-polygons photos: at the edge or far from it.
 
-    python bench/needle_errors.py [gauged/models/crop.onnx] [--data ../shared/datasets/needle-polygons]
+    python bench/investigations/needle_errors.py [gauged/models/crop.onnx] [--data ../shared/datasets/needle-polygons]
 
 Each photo is given whole to the crop model, as `gauged eval models` does, and the needle logits
 are resized to the photo and cut at 0. Every wrong pixel is then sorted:
@@ -22,11 +22,10 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import header  # noqa: E402
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
+from common import header  # noqa: E402
 
 from gauged.evaluation.model_metrics import mask_iou, needle_mask_at  # noqa: E402
 from gauged.evaluation.models import whole_photo_needle_logits  # noqa: E402

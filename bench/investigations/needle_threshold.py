@@ -1,6 +1,6 @@
 """Needle mask IoU of crop models at several logit cuts, on the needle-polygons photos.
 
-    python bench/needle_threshold.py gauged/models/crop.onnx [runs/crop-v9/crop.onnx ...]
+    python bench/investigations/needle_threshold.py gauged/models/crop.onnx [runs/crop-v9/crop.onnx ...]
         [--data ../shared/datasets/needle-polygons] [--cuts -1.5 -1 -0.5 0 0.25]
 
 Each photo is given whole to the crop model (resized to its input, as `gauged eval models` does),
@@ -15,11 +15,10 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import header  # noqa: E402
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
+from common import header  # noqa: E402
 
 from gauged.evaluation.model_metrics import mask_iou  # noqa: E402
 from gauged.evaluation.models import whole_photo_needle_logits  # noqa: E402

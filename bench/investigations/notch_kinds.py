@@ -1,6 +1,6 @@
 """Which major notches the crop model misses, and what its unassigned peaks sit on.
 
-    python bench/notch_kinds.py --shard data/synth-val-256 [--model gauged/models/crop.onnx] [--group "full size"] [--check]
+    python bench/investigations/notch_kinds.py --shard data/synth-val-256 [--model gauged/models/crop.onnx] [--group "full size"] [--check]
 
 ``--shard`` is the held-out crop shard `gauged eval models` scores (`python -m
 gauged.training.prerender crops --seed 1000000 --count 500 --size 256 --out data/synth-val-256`).
@@ -27,15 +27,14 @@ import sys
 from collections import Counter, defaultdict
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
+import numpy as np  # noqa: E402
 from common import header  # noqa: E402
 
-import numpy as np  # noqa: E402
-
 from gauged.evaluation.models import render_scale  # noqa: E402
-from gauged.reader.keypoints import decode_crop_maps  # noqa: E402
-from gauged.reader.notch_check import NotchCheck  # noqa: E402
 from gauged.reader.onnx_model import OnnxModel, packaged_model_path, to_model_input  # noqa: E402
+from gauged.reader.stages.keypoints import decode_crop_maps  # noqa: E402
+from gauged.reader.stages.notch_check import NotchCheck  # noqa: E402
 from gauged.synth.crop import render_crop  # noqa: E402
 from gauged.training.shards import open_crop_shard  # noqa: E402
 
@@ -137,7 +136,7 @@ def main() -> int:
     for kind, (count, hit) in sorted(recall.items()):
         print(f"  {kind:24s} {count:5d}  {hit / count:6.1%}")
     gaps = np.asarray(separation)
-    print(f"labelled majors whose nearest other notch is closer than d px in the captured image: "
+    print("labelled majors whose nearest other notch is closer than d px in the captured image: "
           + ", ".join(f"d {d:g}: {(gaps < d).mean():.1%}" for d in (1.0, 1.5, 2.0, 3.0)))
     total = sum(peaks_on.values())
     print(f"what the {total} peaks lie on:")

@@ -1,6 +1,6 @@
 """Where the crop model's major-notch misses are: weak peaks, misplaced peaks, or no response at all.
 
-    python bench/notch_misses.py --shard data/synth-val-256 [--model gauged/models/crop.onnx]
+    python bench/investigations/notch_misses.py --shard data/synth-val-256 [--model gauged/models/crop.onnx]
 
 ``--shard`` is a crop shard of the synthetic engine (`python -m gauged.training.prerender crops
 --seed 1000000 --count 500 --size 256 --out data/synth-val-256`, the held-out crops `gauged eval
@@ -9,7 +9,7 @@ labelled major notch it prints:
 
 - the share with any heatmap cell of at least p (0.05 .. 0.3) within the tolerance (+1 px at the model's input, for the
   cell grid), i.e. whether the model responds there at all;
-- the share whose nearest peak (:func:`gauged.reader.keypoints.find_peaks`, at the reader's
+- the share whose nearest peak (:func:`gauged.reader.stages.keypoints.find_peaks`, at the reader's
   threshold 0.3 and at 0.1, neighbourhood 2 cells as the reader and 1) lies within 1x and 2x the tolerance;
 - the peaks more than 2x the tolerance from every label (false peaks: medium ticks, numbers, the
   needle), as a share of all peaks.
@@ -23,14 +23,13 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
+import numpy as np  # noqa: E402
 from common import header  # noqa: E402
 
-import numpy as np  # noqa: E402
-
 from gauged.evaluation.models import render_scale  # noqa: E402
-from gauged.reader.keypoints import CROP_CHANNELS, find_peaks, sigmoid  # noqa: E402
 from gauged.reader.onnx_model import OnnxModel, to_model_input  # noqa: E402
+from gauged.reader.stages.keypoints import CROP_CHANNELS, find_peaks, sigmoid  # noqa: E402
 from gauged.training.shards import open_crop_shard  # noqa: E402
 
 MAJOR = CROP_CHANNELS.index("major")

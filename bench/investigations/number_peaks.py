@@ -1,13 +1,13 @@
 """Where the OCR reads nothing, does the crop model still know where the numbers are?
 
     gauged eval readings --data data/held1000 --json > held.json
-    python bench/number_peaks.py --data data/held1000 --report held.json
+    python bench/investigations/number_peaks.py --data data/held1000 --report held.json
 
 On the renders the report refused at the given reasons (default ``ocr/no_text`` and
 ``scale/too_few_markers``) whose numbers were captured at least 5 px tall, it counts the main
 scale's printed numbers that have a number peak of the crop model on them (within 0.6 of their
 height), and the peaks. Then, at each peak on a number, it reads the windows the last look tries
-(:mod:`gauged.reader.hint_numbers`: every orientation and height) with the number net and counts
+(:mod:`gauged.reader.ocr.hint_numbers`: every orientation and height) with the number net and counts
 the peaks where some window reads the printed value: what the look can find at best, before it
 chooses one guess per dial. An analysis tool: the truth comes from the labels.
 """
@@ -20,18 +20,23 @@ import math
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import header  # noqa: E402
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
+from common import header  # noqa: E402
 
 from gauged.config.model import ReaderConfig  # noqa: E402
 from gauged.reader.factory import NUMBER_NET_MODEL, build_reader  # noqa: E402
-from gauged.reader.hint_numbers import HEIGHTS, ORIENTATIONS, WIDTHS, WINDOW_HEIGHT, window_quad  # noqa: E402
-from gauged.reader.number_net import NumberNet  # noqa: E402
-from gauged.reader.numbers import parse_number  # noqa: E402
-from gauged.reader.ocr_engine import crop_quad  # noqa: E402
+from gauged.reader.ocr.text import crop_quad  # noqa: E402
+from gauged.reader.ocr.hint_numbers import (  # noqa: E402
+    HEIGHTS,
+    ORIENTATIONS,
+    WIDTHS,
+    WINDOW_HEIGHT,
+    window_quad,
+)
+from gauged.reader.ocr.number_net import NumberNet  # noqa: E402
+from gauged.reader.ocr.numbers import parse_number  # noqa: E402
 from gauged.reader.onnx_model import packaged_model_path  # noqa: E402
 from gauged.types import StageFailure  # noqa: E402
 

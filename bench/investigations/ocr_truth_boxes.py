@@ -1,7 +1,7 @@
 """Is an OCR refusal a failure to find the numbers or to read them? The recogniser on the true boxes.
 
     gauged eval readings --data data/dev300 --json > dev300.json
-    python bench/ocr_truth_boxes.py --data data/dev300 --report dev300.json
+    python bench/investigations/ocr_truth_boxes.py --data data/dev300 --report dev300.json
 
 A synthetic set (``gauged synth images``) labels every printed number with its quad. This script
 gives the OCR recogniser each number of the main scale cut at its true quad (grown by a quarter, as
@@ -19,15 +19,14 @@ import sys
 from collections import defaultdict
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import header  # noqa: E402
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
+from common import header  # noqa: E402
 
-from gauged.reader.numbers import parse_number  # noqa: E402
-from gauged.reader.ocr import ScaleTextReader  # noqa: E402
-from gauged.reader.ocr_engine import crop_quad  # noqa: E402
+from gauged.reader.ocr.text import crop_quad  # noqa: E402
+from gauged.reader.ocr.numbers import parse_number  # noqa: E402
+from gauged.reader.stages.ocr import ScaleTextReader  # noqa: E402
 
 GROUPS = ("read", "ocr/no_text", "scale/too_few_markers", "scale/too_few_inliers")
 MARGIN = 1.25  # quads grown about their centre by this factor

@@ -1,13 +1,13 @@
 """Refusals of a synthetic set split by what the renders show: legible numbers, a whole face, both scale ends.
 
     gauged eval readings --data data/held1000 --json > held1000.json
-    python bench/refusals_by_visibility.py --data data/held1000 --result held1000.json
+    python bench/investigations/refusals_by_visibility.py --data data/held1000 --result held1000.json
 
 ``--data`` is a set made by `gauged synth images` (its ``labels.jsonl`` holds the engine's truth);
 ``--result`` is `gauged eval readings --json` on it. Each image falls in one group by:
 
 - the primary scale's numbers as the camera captured them (``captured_number_px``, under 5 px: no
-  reader can make out their digits, docs/accuracy.md session 9);
+  reader can make out their digits, docs/accuracy.md);
 - whether the whole face is visible (``visible_fraction`` 1) or something lies over part of it
   (a pipe, the frame edge, another dial);
 - whether both scale ends are visible (``start_visible`` and ``end_visible``).
@@ -24,7 +24,7 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 from common import header  # noqa: E402
 
 LEGIBLE_PX = 5.0

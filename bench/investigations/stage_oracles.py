@@ -1,7 +1,7 @@
 """Which stage costs the refusals? The reader re-run with one stage replaced by the ground truth.
 
     gauged eval readings --data data/held1000 --json > held.json
-    python bench/stage_oracles.py --data data/held1000 --report held.json
+    python bench/investigations/stage_oracles.py --data data/held1000 --report held.json
 
 A synthetic set (``gauged synth images``) labels each gauge's scale ellipse, ends, major notches,
 printed numbers and unit. On every image the ``--report`` refused, the reader is run again with
@@ -23,19 +23,18 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import header  # noqa: E402
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
+from common import header  # noqa: E402
 
 import gauged.reader.pipeline as pipeline  # noqa: E402
 from gauged.config.model import ReaderConfig  # noqa: E402
 from gauged.evaluation.readings import evaluate, image_path, load_labels, report  # noqa: E402
 from gauged.geometry.angles import wrap_angle  # noqa: E402
 from gauged.geometry.dial_frame import dial_angle  # noqa: E402
-from gauged.reader.ellipse import ScaleArc  # noqa: E402
 from gauged.reader.factory import build_reader  # noqa: E402
+from gauged.reader.stages.ellipse import ScaleArc  # noqa: E402
 from gauged.types import Ellipse, ScaleMarker, StageFailure  # noqa: E402
 
 VARIANTS = ("arc", "ocr", "arc+ocr")

@@ -1,6 +1,6 @@
 """The units of the readings of real dual-unit and dual-scale dials, against units read by eye.
 
-    python bench/units_real.py [--shared ../shared/datasets]
+    python bench/investigations/units_real.py [--shared ../shared/datasets]
 
 Reads every photo of needle-polygons `valid` and `train` (one of each photo's augmented copies) and
 of gauge-readings-dev, and for each reading on a dial in :data:`MAIN_UNIT` prints the unit the reader
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import cv2
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for common
 from common import header  # noqa: E402
 
 # start of a photo's name -> the unit of the scale the reader reads (the outer one unless noted), by eye
@@ -54,7 +54,7 @@ def main_unit(stem: str) -> str | None:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets")
+    parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets")
     args = parser.parse_args()
     folders = [args.shared / "needle-polygons" / "valid" / "images", args.shared / "needle-polygons" / "train" / "images",
                args.shared / "gauge-readings-dev" / "images"]

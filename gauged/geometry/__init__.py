@@ -78,6 +78,7 @@ __all__ = [
     "select_circle_or_ellipse",
     "to_unit_circle",
     "unrectify_points",
+    "warp_rectified",
     "unwrap",
     "wrap_angle",
     "wrap_to_pi",

@@ -242,7 +242,7 @@ class NeedleRefiner(nn.Module):
     """A residual correction of the needle logit at stride 2, from the branch's last features, the
     encoder's stride-2 features, the normalised input pixels themselves (folded 2x2 into a learnt
     space-to-depth) and the logit. Most wrong needle pixels lie on the mask's outline, where a needle
-    3-5 px wide loses a third of its IoU to a pixel each side (bench/needle_errors.py); the decoder
+    3-5 px wide loses a third of its IoU to a pixel each side (bench/investigations/needle_errors.py); the decoder
     sees the image only through the encoder's features, the refiner sees its pixels."""
 
     def __init__(self, branch_channels: int, f2_channels: int, width: int = 32):
