@@ -48,7 +48,7 @@ class EndsLooks:
         Angles are measured about the ellipse's centre unless the view is oblique, since a pixel of
         pivot error costs a degree on a small dial. But under a close camera's perspective the dial's
         centre projects away from its scale ellipse's centre even when the ellipse is nearly round
-        (held-out 000578: axis ratio 0.97, the pivot 0.06 radii off), and the numbers' angles about the
+        (a held-out render: axis ratio 0.97, the pivot 0.06 radii off), and the numbers' angles about the
         wrong centre then bend by 5-10% from one number to the next, past the scale line's 3-degree
         tolerance ("100, 200, 300" read right, two on a line). So a refused scale gets its ring measured
         about the pivot (:func:`gauged.reader.stages.ellipse.arc_about_pivot`, no new fit), the needle against
@@ -79,7 +79,7 @@ class EndsLooks:
         """Read a dial refused for numbers in the gap between its scale ends only between the numbers
         read, into ``result``; or leave the refusal standing.
 
-        Such a dial's ends are often hidden (a box or a pipe across the dial, held-out 000736): the
+        Such a dial's ends are often hidden (a box or a pipe across the dial, as on a held-out render): the
         largest gap between the notches is the hidden part, and a number half seen at its edge lies
         in it. Without its ends the scale's extent is unknown, but a value between two agreeing
         numbers does not depend on it. So the arc takes the gap's ends (``ends_from_gap``), the scale

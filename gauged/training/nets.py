@@ -25,7 +25,7 @@ DETECTOR_CHANNELS = ("center", "log_w", "log_h", "off_x", "off_y")
 # Per EfficientNet-Lite variant, the block after which each stride's features are tapped (the last block
 # before the next halving) and their channels. Lite0: stride 2 -> block 0 (16 ch), 4 -> block 2 (24 ch),
 # 8 -> block 4 (40 ch), 16 -> block 10 (112 ch). Lite1 and Lite2 (deeper, Lite2 also wider) are there to
-# measure whether a larger ImageNet encoder learns the needle better (model card, session 26).
+# measure whether a larger ImageNet encoder learns the needle better (see gauged/models/README.md).
 ENCODERS = {
     "lite0": ({2: 0, 4: 2, 8: 4, 16: 10}, {2: 16, 4: 24, 8: 40, 16: 112}),
     "lite1": ({2: 0, 4: 3, 8: 6, 16: 14}, {2: 16, 4: 24, 8: 40, 16: 112}),

@@ -1,4 +1,4 @@
-"""The notch check: a small CNN that tells the crop model's major-notch peaks from minor ticks (session 25).
+"""The notch check: a small CNN that tells the crop model's major-notch peaks from minor ticks.
 
 Run by the reader as :class:`gauged.reader.stages.notch_check.NotchCheck` (``gauged/models/notch_check.onnx``).
 Its data are the shipped crop model's own peaks on engine crops, each labelled by the engine's truth:

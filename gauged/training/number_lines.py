@@ -1,4 +1,4 @@
-"""A recogniser of scale numbers trained on the engine's renders: data, net and training (session 10).
+"""A recogniser of scale numbers trained on the engine's renders: data, net and training.
 
 The reader reads numbers with PP-OCR's recogniser (:mod:`gauged.reader.ocr.engine`), and reads a
 dial again with this net (exported to ``gauged/models/numbers.onnx``, run by
@@ -59,7 +59,7 @@ def number_lines(image: np.ndarray, gauge: dict, render_scale: float,
             if rng is not None:
                 grow *= (rng.uniform(0.9, 1.15), rng.uniform(0.85, 1.2))
                 centre = centre + rng.normal(0, 0.08 * height, 2)
-            # Grown about its centre in image x and y (as measured in session 10), then moved.
+            # Grown about its centre in image x and y, then moved.
             line = crop_quad(image, centre + (quad - quad.mean(axis=0)) * grow)
             out.append((line, number["text"], height * render_scale))
     return out
@@ -91,7 +91,7 @@ def write_lines(first_seed: int, count: int, out: Path, workers: int = 2) -> int
     return len(lines)
 
 
-SHIPPED_WIDTH = 24  # first-layer channels of the shipped net (48 until session 16); loaders read a checkpoint's own
+SHIPPED_WIDTH = 24  # first-layer channels of the shipped net (48 in earlier versions); loaders read a checkpoint's own
 
 
 class NumberNet(nn.Module):

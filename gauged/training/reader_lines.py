@@ -1,4 +1,4 @@
-"""The reader's own recogniser lines on engine renders, each labelled from the render's truth (session 11).
+"""The reader's own recogniser lines on engine renders, each labelled from the render's truth.
 
 The number net learnt from numbers cut at their true quads (:func:`gauged.training.number_lines.number_lines`).
 The reader gives its recogniser something else: the text detector's boxes and the ink boxes at the

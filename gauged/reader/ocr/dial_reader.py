@@ -44,7 +44,7 @@ LOCAL_DETECTIONS = 1  # hints still unexplained after the ink reads that get a t
 CLOSER_RADII = 0.75  # scale radii: half the side of the face's centre square read again for a unit
 CLOSER_SIDE = 480  # px the detector sees that square at (the ring square, 1.45 radii, is seen at 384)
 CLOSER_MIN_MATCH = 0.9  # the closer look takes spelled units only: its lone letters ("A", "C", "F" of logos and
-# strokes) named the wrong unit on 9 of the five synthetic sets' readings (session 22); nor a lone "Pa", the
+# strokes) named the wrong unit on 9 of the five synthetic sets' readings; nor a lone "Pa", the
 # tail of a "kPa" or "MPa" whose first letter it did not read (2 more)
 QUICK_ENOUGH = 4  # numbers of one progression read at the hints alone that end the quick pass
 POLAR_DETECT_SCALE = 0.75  # of the strip's size for its text detection: the same 130 of 300 dev renders and 7 of 21
@@ -215,8 +215,8 @@ class DialTextReader:
             return None, []
         numbers, turned_part = self.read_at_hints(image_bgr, hints, circle)
         if turned_part:
-            # Glyphs of a turned "30, 40, 50" read "3, 4, 5" agree on a line ten times too flat (synthetic
-            # fresh13 000296: 86% off); the full pass reads the detector's turned boxes whole.
+            # Glyphs of a turned "30, 40, 50" read "3, 4, 5" agree on a line ten times too flat (a synthetic
+            # render, 86% off); the full pass reads the detector's turned boxes whole.
             return None, numbers
         # Numbers deep inside the ring belong to an inner, secondary scale: the main scale's numbers
         # were not hinted, so only the full pass can find them.

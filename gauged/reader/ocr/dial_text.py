@@ -196,7 +196,7 @@ def _dedupe(boxes: list[TextBox]) -> list[TextBox]:
 
     A box that reads part of the text of a box around its centre gives way to it, whatever their
     scores: the ink box at a hint held only the "5" of a tilted "25", read with score 1.0 against
-    the detector's 0.99 (synthetic dev 000098, refused with 2 agreeing numbers of 6).
+    the detector's 0.99 (a synthetic render, refused with 2 agreeing numbers of 6).
     """
     boxes = [b for b in boxes if not any(_part_of(b, o) for o in boxes)]
     out: list[TextBox] = []

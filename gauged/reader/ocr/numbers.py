@@ -153,7 +153,7 @@ def read_as_digits(text: str) -> bool:
 
 
 # A dangling point ("0.", "20.") parses as tick debris, but it is a decimal cut short as often: "0." for
-# "-0.3", "1" and "2" for "-0.8", "-0.4" made 0..2.2 of a -1..0 vacuum dial (fresh13 000257, 195% off).
+# "-0.3", "1" and "2" for "-0.8", "-0.4" made 0..2.2 of a -1..0 vacuum dial (a synthetic render, 195% off).
 _DANGLING_POINT = re.compile(r"\d[.,]\s*$")
 
 

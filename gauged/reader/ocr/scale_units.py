@@ -15,8 +15,8 @@ off by the conversion factor, 14.5x for bar and psi. The evidence, strongest fir
 2. **Where the units are printed.** With several units and one scale read (the reader takes a lone
    ring for the main, outer scale), the unit printed farthest from the dial centre is the outer
    scale's: on every one of 13 real dual-unit dials of the needle-polygons photos that the reader
-   read, the main scale's unit stands below or outside the other's. Measured in docs/accuracy.md
-   (session 22). The synthetic engine does not follow this convention (it places the units at random
+   read, the main scale's unit stands below or outside the other's. Measured in docs/accuracy.md.
+   The synthetic engine does not follow this convention (it places the units at random
    slots), so the rule is not learnt from it.
 
 With one unit printed and one scale, the scale gets that unit, as before. When nothing decides, a

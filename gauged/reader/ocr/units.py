@@ -68,7 +68,7 @@ UNIT_SIZE: dict[str, tuple[str, float]] = {
     "km/h": ("speed", 1.0), "knots": ("speed", 1.852),
 }
 WORD_MIN_SCORE = 0.9  # a word of a longer text must spell its unit (look-alike digits allowed), not come near
-# one: the fuzzy match took a brand's "Barsa" for "bars" (synthetic held-out 000078, a degC dial read "bar")
+# one: the fuzzy match took a brand's "Barsa" for "bars" (a degC dial of a synthetic held-out set read "bar")
 _SUFFIX = re.compile(r"\((?:g|a|gauge|abs)\)$")
 _LOOKALIKE = str.maketrans({"0": "o", "1": "l", "5": "s", "|": "l"})
 

@@ -41,7 +41,7 @@ TOLERANCE = 0.012  # of the crop side: a notch farther than this from the ellips
 RMS_FRACTION = 0.02  # of the ring's radius: the notch RMS a fit may have (with a floor of TOLERANCE / 2)
 RING_SEARCH_BELOW = 0.6  # share of the notch peaks: a first ring explaining fewer is searched for a better one
 RING_MIN_SHARE = 0.45  # ... and a ring kept with both ends and the pivot on it this many (else RING_SEARCH_BELOW):
-# the crop model's peaks off the ring are 22% of its peaks, 38% on far gauges (session 20, _share_needed)
+# the crop model's peaks off the ring are 22% of its peaks, 38% on far gauges (see _share_needed)
 PIVOT_SURE = 0.5  # pivot peak score above which the pivot is trusted to check the ring
 SHORT_ARC = np.radians(150.0)  # notches covering less than this are fitted about a confident pivot
 PIVOT_OFF_CENTRE = 0.2  # radii; on 300 synthetic renders the true pivot is within 0.12 of the ring centre

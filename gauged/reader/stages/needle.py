@@ -104,7 +104,7 @@ def _rival_needle(others: list[tuple[np.ndarray, np.ndarray]], arc: ScaleArc, ma
     needle of its own: its line passes within ``max_offset`` radii of the centre too and points at a
     place of the scale more than :data:`RIVAL_DEG` away (and not the opposite way, where a counterweight
     lies). A cable across the face of a -30..50 degC dial made a component as large as the needle's,
-    nearer the hub, and was read 10.1 for -31.3 (fresh set seed 15,000,000, 000190); a dial with two
+    nearer the hub, and was read 10.1 for -31.3 (a synthetic render); a dial with two
     hands has two needles as well. Which one is the needle the mask cannot tell, so the reader refuses."""
     for points, probs in others:
         if len(points) < max(MIN_PIXELS, RIVAL_SHARE * size):

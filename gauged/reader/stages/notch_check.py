@@ -1,7 +1,7 @@
 """A second look at each major-notch peak: is it a major notch, or a minor tick, a number, a near miss?
 
 The crop model's ``major`` map fires on the minor and medium ticks between the major notches too
-(docs: gauged/models/README.md, "Session 25"): on held-out renders a fifth of its peaks are not major
+(docs: gauged/models/README.md): on held-out renders a fifth of its peaks are not major
 notches, and the ring the reader fits through them bends. The notch check (``notch_check.onnx``,
 trained by :mod:`gauged.training.notch_check`) is a small CNN that looks at each peak again, with
 more context than a heatmap cell has: two windows of :data:`PATCH` pixels centred on the peak, one

@@ -162,7 +162,7 @@ class ScaleTextReader(DialTextReader):
         view = self._read_view(crop, arc, hints, detail, downs[0])
         if len(downs) > 1:
             # Read both ways even when the gap-down view gives a progression: upside down, "100, 200,
-            # 300" read "10, 20, 30" with the "0" make one ten times too flat (held-out 000874, 53% off).
+            # 300" read "10, 20, 30" with the "0" make one ten times too flat (a held-out render, 53% off).
             other = self._read_view(crop, arc, hints, detail, downs[1])
             if other.agreeing() > view.agreeing():
                 view = other

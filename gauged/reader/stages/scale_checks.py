@@ -64,7 +64,7 @@ def _rival(model: ScaleModel) -> StageFailure | None:
 
     Two lines with as many agreeing numbers each (sharing at most one, a "0" both start from) mean the
     evidence does not say which scale the dial has: "0, 10, 15, 25" (trailing zeros unread) beside
-    "0, 50, 200, 300" on a 0..300 dial gave 22.6 for 224.6 (held-out 000831).
+    "0, 50, 200, 300" on a 0..300 dial gave 22.6 for 224.6 (a held-out render).
     """
     inliers = [m for m in model.markers if m.inlier and m.angle is not None]
     outliers = [m for m in model.markers if not m.inlier and m.angle is not None]
@@ -140,7 +140,7 @@ def _past_ends(model: ScaleModel) -> StageFailure | None:
     Printed scale numbers sit between the end notches, so the line through them puts each at a value
     inside ``min..max``. A line that puts its own numbers far outside was drawn through texts that are
     not the scale's: "1", "1000" and "2000" read from distractor text across an upside-down 0..6 dial
-    made a scale of 744..1231 and answered 1132 for 4.65 (held-out 000516).
+    made a scale of 744..1231 and answered 1132 for 4.65 (a held-out render).
     """
     values = agreeing_digit_values(model)
     if not values:
@@ -163,7 +163,7 @@ def _a_turn_on(model: ScaleModel) -> StageFailure | None:
     not end there: the ends are wrong, and a needle beyond the false end is read on the wrong side of
     the dial. A 0..0.25 bar scale sweeping 335 degrees got its start at "0.15" and its end at "0.10";
     "0.20" then lay a turn on from where the line put it, and the needle at 0.145 was read as -0.12
-    (fresh set 000164).
+    (a synthetic render).
     """
     values = np.unique(agreeing_digit_values(model))
     if model.slope == 0 or len(values) < 2:
