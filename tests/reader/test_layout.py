@@ -41,3 +41,17 @@ def test_alarms_do_not_import_tracking():
     alarms = READER.parent / "alarms"
     for path in alarms.glob("*.py"):
         assert not {m for m in _runtime_imports(path) if m.startswith("gauged.tracking")}, path.name
+
+
+def test_the_package_names_no_session_and_no_dataset_image():
+    """Comments explain the wrong answer a rule prevents, not the session or the image that showed it
+    (git history keeps those): no "session 22", no "held-out 000874"-style image id."""
+    import re
+
+    package = READER.parent
+    pattern = re.compile(r"\bsession \d+|\b(held-out|fresh\d*|dev|synthetic|render) \d{6}\b|\(held-out \d|\b0\d{5}\.(jpg|png)",
+                         re.IGNORECASE)
+    allowed = {"synth/truth.py"}  # the label schema's example file name
+    hits = [f"{p.relative_to(package)}:{k}" for p in package.rglob("*.py") if str(p.relative_to(package)) not in allowed
+            for k, line in enumerate(p.read_text().splitlines(), start=1) if pattern.search(line)]
+    assert not hits, hits
