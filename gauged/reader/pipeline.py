@@ -314,14 +314,6 @@ class GaugeReader(EndsLooks):
                     result.markers, scales = again, retry
         if isinstance(scales, StageFailure):
             scales = self._hint_look(image, crop, keypoints, arc, units, hints, result, timer) or scales
-        if isinstance(scales, StageFailure) and scales.stage == "scale" and result.markers:
-            # Every clockwise reading refused: the numbers as read may rise counter-clockwise (vacuum
-            # and compound gauges, some thermometers). Tried last, on the first pass's numbers as read,
-            # so no clockwise dial is read the other way, and no sign is added to a printed number.
-            with timer("scale"):
-                counter = fit_scales(arc, result.markers, units, hints=hints, direction=-1)
-            if not isinstance(counter, StageFailure):
-                scales = counter
         if isinstance(scales, StageFailure):
             return scales
         primary_first(scales, primary_unit)

@@ -141,8 +141,8 @@ def test_a_refused_scale_gets_a_second_look_at_its_ring_texts():
     assert (gauge["min"], gauge["max"]) == (-1.0, 0.0)
     read = _read_right(reader, image, gauge)
     assert len(read.markers) >= 4 and all(m.value <= 0 for m in read.markers)
-    # the first reading's numbers alone make no clockwise scale: the second look is what reads it (without
-    # it, those numbers rising counter-clockwise are the reader's last try, a sign the OCR lost is not restored)
+    # the first reading's numbers alone make no clockwise scale: the second look is what reads it (their
+    # counter-clockwise line would overrule the minus signs read on "-1.0" and "-0.4", so it is not taken)
     reader.ocr.reread_markers = lambda *args, **kwargs: None
     (first,) = reader.read_image(image)
     clockwise = fit_scales(first.arc, first.markers)

@@ -19,6 +19,12 @@ are clear, this looks for the grid that the texts most likely print:
   its places: the texts read one way up ("upright") or all radially ("radial"), never a mix, and
   all at one distance from the centre (:data:`RADIUS_BAND`), as one scale's numbers are printed.
 
+A grid may rise clockwise or counter-clockwise. The numbers alone do not tell a ring's mirror grids
+apart ("30, 25 ... 0" clockwise print 0..30 rising counter-clockwise, or -30..0 rising clockwise with
+every minus unread); the signs seen do: a negative value whose minus went unseen costs the grid
+:data:`UNSIGNED`, a positive value on a text that shows a minus :data:`OVERRULED`, so the grid that
+explains the texts as read wins.
+
 Two kinds of misreading make false grids, so neither is proposed: whole numbers on a ring where some
 text reads as a decimal number (their decimal points were lost: "0.5, 1.0, 1.5" read "5, 10, 15"),
 and negative numbers none of which shows its minus sign (unless they end at 0, as a -30..0 scale whose
@@ -48,6 +54,9 @@ PLACE_TOLERANCE = math.radians(4.0)  # a text this far from a grid place (or a q
 MARGIN = 2.0  # nats: an agreeing text spells its number at least e^-2 as likely as its best string
 FLOOR = 1.0  # nats per character: ... and at least e^-1 per character in itself
 UNSIGNED = 1.0  # nats: a negative number read without its minus sign agrees at this cost
+MINUS_SEEN = 3.0  # nats: a text shows a minus sign when its signed spelling is at least e^-3 as likely
+OVERRULED = MINUS_SEEN  # nats: a positive number on a text that shows a minus sign counts this much less
+# (as much as a faint minus can cost the signed reading: where one is seen, the signed grid is not worse)
 MIN_NUMBERS = 4  # agreeing texts a grid needs (the first reading's scale needs 3)
 AGREE_SHARE = 0.6  # of the texts on the grid's places
 RADIUS_BAND = 0.12  # scale radii: a grid's texts lie this close to its two proposing texts' mean radius
@@ -101,15 +110,23 @@ def spellings(value: float, places: int) -> tuple[list[str], list[str]]:
     return sorted("-" + f for f in forms), sorted(forms)
 
 
-def _likelihood(candidate: _Candidate, value: float, places: int, score: Score) -> tuple[float, str, bool]:
+def _likelihood(candidate: _Candidate, value: float, places: int, score: Score) -> tuple[float, str, bool, float]:
     """The log-likelihood of the candidate spelling ``value`` (its likeliest spelling), that spelling,
-    and whether it was read with its sign (False for a negative value read without its minus)."""
+    whether it was read with its sign (False for a negative value read without its minus), and what
+    the sign costs the grid's score: :data:`UNSIGNED` for a minus not seen, :data:`OVERRULED` for a
+    positive value on a text that shows one (:data:`MINUS_SEEN`). The two costs keep the mirror
+    grids of one ring apart: its texts "30, 25 ... 0" clockwise print 0..30 rising counter-clockwise,
+    or -30..0 rising clockwise with every minus unread; the signs seen decide."""
     key = (round(value, 9), places)
     if key not in candidate.cache:
         signed, unsigned = spellings(value, places)
         options = [(score(candidate.reading, s), s, True) for s in signed]
         options += [(score(candidate.reading, s) - UNSIGNED, "-" + s, False) for s in unsigned]
-        candidate.cache[key] = max(options)
+        likelihood, spelling, with_sign = max(options)
+        cost = 0.0 if with_sign else UNSIGNED  # (already in the likelihood of an unsigned spelling)
+        if value > 0 and max(score(candidate.reading, "-" + s) for s in signed) >= likelihood - MINUS_SEEN:
+            cost = OVERRULED
+        candidate.cache[key] = (likelihood, spelling, with_sign, cost)
     return candidate.cache[key]
 
 
@@ -145,26 +162,26 @@ def _grid_markers(candidates: Sequence[_Candidate], first: tuple[int, float], se
         steps = (vj - vi) / step
         if abs(steps - round(steps)) > 1e-6 or not 1 <= round(steps) <= MAX_STEPS or abs(vi / step - round(vi / step)) > 1e-6:
             continue
-        spacing = step / slope
-        if not MIN_SPACING <= spacing <= MAX_SPACING:
+        spacing = step / slope  # negative on a scale rising counter-clockwise
+        if not MIN_SPACING <= abs(spacing) <= MAX_SPACING:
             continue
         places = decimals(step)
         if places == 0 and decimal_seen:
             continue
-        tolerance = min(0.25 * spacing, PLACE_TOLERANCE)
+        tolerance = min(0.25 * abs(spacing), PLACE_TOLERANCE)
         on_places, agreeing = 0, []
         for k, candidate in enumerate(candidates):
             angle = candidate.text.angle
             place = (angle - ai) / spacing
-            if (abs(place - round(place)) * spacing > tolerance or not start - spacing / 2 <= angle <= end + spacing / 2
+            if (abs(place - round(place)) * abs(spacing) > tolerance or not start - abs(spacing) / 2 <= angle <= end + abs(spacing) / 2
                     or abs(candidate.text.radius - radius) > RADIUS_BAND):
                 continue
             on_places += 1
             value = vi + round(place) * step
-            likelihood, spelling, signed = _likelihood(candidate, value, places, score)
+            likelihood, spelling, signed, cost = _likelihood(candidate, value, places, score)
             floor = -FLOOR * len(spelling)
             if likelihood >= candidate.best - MARGIN and likelihood >= floor:
-                agreeing.append((k, value, spelling, likelihood - max(candidate.best, floor), signed))
+                agreeing.append((k, value, spelling, likelihood - (cost if signed else 0.0) - max(candidate.best, floor), signed))
         indices = {a[0] for a in agreeing}
         values = [a[1] for a in agreeing]
         if i not in indices or j not in indices or len(set(values)) < len(values):
@@ -209,8 +226,8 @@ def likely_markers(views: Sequence[Sequence[RingText]], start: float, end: float
             for first in anchors:
                 for second in anchors:
                     if (first[0] == second[0] or second[1] <= first[1]
-                            or candidates[second[0]].text.angle <= candidates[first[0]].text.angle):
-                        continue
+                            or candidates[second[0]].text.angle == candidates[first[0]].text.angle):
+                        continue  # a grid rises clockwise or counter-clockwise, whichever its texts say
                     found = _grid_markers(candidates, first, second, start, end, score, decimal_seen)
                     if found is not None and (best is None or found[0] > best[0]):
                         best = found

@@ -26,7 +26,7 @@ from gauged.geometry.scale_fit import (
     marker_centres,
     number_rings,
 )
-from gauged.reader.ocr.numbers import round_step
+from gauged.reader.ocr.numbers import MINUS_LIKE, round_step
 from gauged.reader.ocr.scale_units import label_scales
 from gauged.reader.ocr.units import PrintedUnit
 from gauged.reader.stages.ellipse import MAX_SPAN, MIN_SPAN, ScaleArc
@@ -46,7 +46,8 @@ GRID_OFF_SHARE = 0.3  # more than this share of them between grid lines refutes 
 ROUND_END = 0.25  # of the number step: how near whole multiples the numbers' line must put both scale ends
 END_WEIGHT = 2.0  # how many numbers each end counts as in the line fitted again through them (0.5, 1, 2 gave
 # 300 dev renders a mean error of 0.327, 0.329, 0.330%, the 21 real photos 0.55, 0.50, 0.46%)
-CLEARLY_MORE = 2  # distinct agreeing numbers by which a counter-clockwise line must beat a clockwise one
+CLEARLY_MORE = 1  # evidence (distinct agreeing numbers less sign edits) by which a counter-clockwise
+# line must beat a clockwise one: a tie stays clockwise
 RETRY_ZERO_MARGIN = 0.05  # of the span: a fitted end this far past zero is on the other side of it
 
 
@@ -120,7 +121,7 @@ def with_round_ends(arc: ScaleArc, model: ScaleModel) -> ScaleModel:
     those values (a 0..1000 kPa dial: 13.3..998.7, reading 15.7 at rest for 0): printed numbers sit
     a degree or two off their notches, and the line extrapolates that to the ends. Each end counts
     as :data:`END_WEIGHT` numbers, a hedge between the numbers and the ends: on renders the numbers
-    sit on their notches and the end peaks carry their own error (docs/accuracy.md, session 22). Not
+    sit on their notches and the end peaks carry their own error (docs/accuracy.md). Not
     for ends inferred from a notch gap (a guess, or the edge of what is visible) nor for a full-circle
     scale, which has no ends.
     """
@@ -151,7 +152,7 @@ def _rescue(arc: ScaleArc, markers: list[ScaleMarker], rings: list[list[ScaleMar
     A lone ring may be a full-circle scale: ends inferred inside a scale that has none cut its
     numbers in two (:func:`gauged.reader.stages.full_circle.fit_full_circle`). Two outer numbers too few for
     a scale of their own make one with a number of the inner ring on their line (a "0" printed
-    nearer the centre than "100, 200": synthetic dev 000077).
+    nearer the centre than "100, 200" on a synthetic render).
     """
     if len(rings) == 1:
         return fit_full_circle(arc, markers, None)
@@ -164,8 +165,8 @@ def _secondary_only(arc: ScaleArc, model: ScaleModel, hints: np.ndarray | None =
     """A failure when the numbers read are a dual-scale dial's inner (secondary) scale and its main
     scale went unread: they sit deep inside the scale ring, or the crop model sees printed numbers
     further out that no read number explains. Answering with the inner scale would be a reading in
-    another unit (synthetic 000022 read 11.0 on its 0..35 inner scale for 0.78 on its 0..2.5 main
-    one; 000650 read 323.7 on its 0..350 inner scale for 3.28 of 0..4)."""
+    another unit (a synthetic render read 11.0 on its 0..35 inner scale for 0.78 on its 0..2.5 main
+    one; another read 323.7 on its 0..350 inner scale for 3.28 of 0..4)."""
     inliers = [m for m in model.markers if m.inlier]
     radius = float(np.median(normalized_radius(arc.ellipse, marker_centres(inliers))))
     if radius < SECONDARY_RADIUS:
@@ -221,19 +222,54 @@ def _from_ring(model: ScaleModel, ring: list[ScaleMarker]) -> int:
 
 
 def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int = 1) -> ScaleModel | StageFailure:
+    """The ring's scale rising in ``direction``; for +1 (the default: clockwise unless the evidence
+    says otherwise) the counter-clockwise line is fitted too and the better explained one kept.
+
+    The two directions of a dial are mirror images in the numbers alone: "0, -0.2, -0.4 ... -1.0"
+    clockwise is a -1..0 scale rising counter-clockwise, or, with every minus sign taken for a tick,
+    a 0..1 scale rising clockwise. What tells them apart is how many signs each must overrule
+    (:func:`sign_edits`): a line is scored by its distinct agreeing numbers less its sign edits, the
+    counter-clockwise one wins when it scores :data:`CLEARLY_MORE` more, and alone only when it
+    overrules no sign (the numbers as read rise counter-clockwise)."""
     model = _checked_ring(arc, ring, min_inliers, direction)
-    if direction > 0 and not isinstance(model, StageFailure):
-        # The numbers may rise the other way: a tick read as a minus ("-1.4" beside a "1.4") can make
-        # three numbers of a counter-clockwise dial agree on a clockwise line. The direction with
-        # clearly more distinct agreeing numbers wins; clockwise keeps a near tie.
-        counter = _checked_ring(arc, ring, min_inliers, -1)
-        if not isinstance(counter, StageFailure) and _support(counter) >= _support(model) + CLEARLY_MORE:
-            return counter
-    return model
+    if direction < 0:
+        return model
+    counter = _checked_ring(arc, _signs_as_read(ring), min_inliers, -1)
+    if isinstance(counter, StageFailure):
+        return model
+    if isinstance(model, StageFailure):
+        return counter if sign_edits(counter) == 0 else model
+    return counter if _evidence(counter) >= _evidence(model) + CLEARLY_MORE else model
 
 
-def _support(model: ScaleModel) -> int:
-    return len(set(agreeing_digit_values(model)))
+def sign_edits(model: ScaleModel) -> int:
+    """How many signs read on the dial ``model`` overrules: an agreeing number it reads with another
+    sign than its text shows (a minus taken for a tick, "-0.2" as 0.2, or one added that was not
+    read), and a number read negative that the fit left out but whose magnitude lies on its line
+    (within a quarter step: "-1.0" where the line puts 1.0)."""
+    agreeing = [m for m in model.markers if m.inlier]
+    edits = sum(_read_negative(m.text) != (m.value < 0) for m in agreeing if m.value != 0)
+    values = np.unique([m.value for m in agreeing])
+    step = round_step(values) if len(values) > 1 else 0.0
+    for m in model.markers:
+        if not m.inlier and m.angle is not None and m.value < 0 and step > 0:
+            edits += abs(model.value_at(m.angle) + m.value) <= 0.25 * step
+    return edits
+
+
+def _signs_as_read(ring: list[ScaleMarker]) -> list[ScaleMarker]:
+    """The markers with the signs their texts show (a reader blind to minus signs, the number net,
+    gives "-10" the value 10)."""
+    return [replace(m, value=-m.value) if m.value > 0 and _read_negative(m.text) else m for m in ring]
+
+
+def _read_negative(text: str) -> bool:
+    text = text.strip()
+    return bool(text) and text[0] in MINUS_LIKE
+
+
+def _evidence(model: ScaleModel) -> int:
+    return len(set(agreeing_digit_values(model))) - sign_edits(model)
 
 
 def _checked_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int) -> ScaleModel | StageFailure:
@@ -245,14 +281,14 @@ def _checked_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, dire
         return StageFailure(STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
     # A letter taken for a digit does not count towards the minimum: "S" read as 5 beside "15, 25"
     # (a 0..2.5 bar render whose decimal points all went unread) made three agreeing numbers of a
-    # line 10x too steep, 516% off (held-out 000958). The dev sets lost no reading to this rule.
+    # line 10x too steep, 516% off (a held-out render). The dev sets lost no reading to this rule.
     values = agreeing_digit_values(model)
     digits = len(values)
     if digits < min_inliers:
         return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers read as digits, need {min_inliers}")
     # Nor does one number read twice: two boxes read "0" at one "0.05", beside "0.1", made a line
-    # through two printed numbers, -0.25..0.10 for a 0..0.25 dial, 176% off (held-out 000744; with
-    # 000810, 6.9% off, the only reads of 1,308 on the dev, fresh, held-out and real sets with fewer
+    # through two printed numbers, -0.25..0.10 for a 0..0.25 dial, 176% off (a held-out render; with
+    # another, 6.9% off, the only reads of 1,308 on the dev, fresh, held-out and real sets with fewer
     # than three distinct agreeing values).
     distinct = len(set(values))
     if distinct < min_inliers:

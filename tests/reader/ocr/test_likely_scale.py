@@ -118,16 +118,17 @@ def test_no_grid_of_whole_numbers_where_a_decimal_number_is_read():
     assert [(m.text, m.value) for m in markers] == [("0.0", 0.0), ("0.2", 0.2), ("0.4", 0.4), ("0.8", 0.8)]
 
 
-def test_negative_numbers_need_one_minus_sign_seen_or_to_end_at_zero():
-    # "30, 25, 20, 15" falling clockwise and no minus sign anywhere: not taken for -30..-15
+def test_the_signs_seen_decide_between_the_mirror_grids_of_a_ring():
+    # "30, 25, 20, 15" falling clockwise with no minus sign anywhere: printed so, rising counter-clockwise
+    no_minus = ring([plain(t) for t in ("30", "25", "20", "15")])
+    assert [m.value for m in likely_markers([no_minus], 0.0, math.radians(135.0), score)] == [30.0, 25.0, 20.0, 15.0]
+    # the same with a faint minus sign seen on each: -30..-15 rising clockwise
     texts = ring([faint_minus(t) for t in ("-30", "-25", "-20", "-15")])
-    no_minus = ring([plain(t.lstrip("-")) for t in ("-30", "-25", "-20", "-15")])
-    assert likely_markers([no_minus], 0.0, math.radians(135.0), score) is None
     assert [m.value for m in likely_markers([texts], 0.0, math.radians(135.0), score)] == [-30.0, -25.0, -20.0, -15.0]
-    # ...unless they are a scale of negatives up to 0 (-30..0 degC): "30, 20, 10, 0" falling clockwise
+    # "30, 20, 10, 0" and no minus sign: 0..30 counter-clockwise, not -30..0 with every sign unread
     up_to_zero = ring([plain(t) for t in ("30", "20", "10", "0")])
-    assert [m.value for m in likely_markers([up_to_zero], 0.0, math.radians(135.0), score)] == [-30.0, -20.0, -10.0, 0.0]
-    # but not a grid that crosses 0 with no minus sign seen ("6, 4, 0, 1" taken for -6, -4, ...)
+    assert [m.value for m in likely_markers([up_to_zero], 0.0, math.radians(135.0), score)] == [30.0, 20.0, 10.0, 0.0]
+    # no grid that crosses 0 with no minus sign seen ("6, 4, 2, 0, 2" taken for 6..-2)
     crossing = ring([plain(t) for t in ("6", "4", "2", "0", "2")])
     assert likely_markers([crossing], 0.0, math.radians(180.0), score) is None
 

@@ -285,3 +285,35 @@ def test_a_line_that_puts_the_scale_ends_near_round_values_is_fitted_with_them()
     # nor are ends inferred from a gap between notches (hidden ends, or a guess)
     inferred = replace(arc, ends_inferred=True)
     assert with_round_ends(inferred, fitted) == fitted
+
+
+def _counter_clockwise_vacuum(texts_values: list[tuple[str, float]]) -> list[ScaleMarker]:
+    """A -1..0 dial rising counter-clockwise: -1.0 at the start notch's place of a clockwise dial's end,
+    so clockwise from the start its numbers read 0.0, -0.2 ... -1.0; (text, value) as the OCR gave them."""
+    return [ScaleMarker(text, value, _box(_point(DIAL, k, 1.15, len(texts_values) - 1)))
+            for k, (text, value) in enumerate(texts_values)]
+
+
+def test_a_counter_clockwise_dial_is_read_with_the_signs_its_numbers_show():
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    printed = [0.0, -0.2, -0.4, -0.6, -0.8, -1.0]
+    # every minus read: the numbers fall clockwise, so the scale rises counter-clockwise
+    as_read = _counter_clockwise_vacuum([(f"{v:.1f}", v) for v in printed])
+    (scale,) = fit_scales(arc, as_read)
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((-1.0, 0.0))
+    # a reader blind to minus signs gave the values unsigned ("-0.4" valued 0.4): the clockwise 0..1 line
+    # would overrule five read signs, the counter-clockwise one none
+    unsigned = _counter_clockwise_vacuum([(f"{v:.1f}", abs(v)) for v in printed])
+    (scale,) = fit_scales(arc, unsigned)
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((-1.0, 0.0))
+    # with no minus sign read at all the numbers are taken as read, 0..1 rising clockwise: nothing on
+    # the dial tells it from its mirror image
+    (scale,) = fit_scales(arc, _counter_clockwise_vacuum([(f"{abs(v):.1f}", abs(v)) for v in printed]))
+    assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 1.0))
+
+
+def test_a_clockwise_dial_keeps_its_direction_when_a_tick_reads_as_a_minus():
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    texts = ["0", "1", "-2", "3", "4", "5", "6", "7", "8", "9", "10"]  # a tick before the "2"
+    (scale,) = fit_scales(arc, _ring(DIAL, [float(t) for t in texts], 1.15))
+    assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 10.0))
