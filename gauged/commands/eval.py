@@ -65,6 +65,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_readings(args: argparse.Namespace) -> int:
+    from gauged.reader.evidence import evidence
     from gauged.reader.factory import build_reader
 
     try:
@@ -98,7 +99,7 @@ def run_readings(args: argparse.Namespace) -> int:
         best = reads[0]
         if best.value is None:
             return None, best.failure, None
-        return best.value.value, None, best.unit, best.value.confidence
+        return best.value.value, None, best.unit, best.value.confidence, evidence(best)
 
     result = report(evaluate(labels, read))
     print(json.dumps(result, indent=1) if args.json else format_table(result))

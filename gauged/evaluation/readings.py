@@ -58,6 +58,7 @@ class Outcome:
     failure: StageFailure | None
     unit: str | None = None  # the unit the reader gave the reading
     confidence: float | None = None  # the reader's confidence in the reading
+    evidence: dict[str, float] | None = None  # what the reading rests on (gauged.reader.evidence)
 
     @property
     def relative_error(self) -> float | None:
@@ -143,7 +144,7 @@ def summarize(outcomes: list[Outcome]) -> Summary:
 
 def evaluate(labels: list[Label], read: Callable[[Label], tuple]) -> list[Outcome]:
     """Outcomes of ``read(label)``: ``(value, failure)``, ``(value, failure, unit)`` or
-    ``(value, failure, unit, confidence)``."""
+    ``(value, failure, unit, confidence[, evidence])``."""
     return [Outcome(label, *read(label)) for label in labels]
 
 
@@ -188,7 +189,7 @@ def report(outcomes: list[Outcome]) -> dict:
         "images": [{"image": o.label.image, "truth": o.label.reading, "value": o.value,
                     "relative_error": o.relative_error, "number_px": o.label.number_px,
                     "captured_number_px": o.label.captured_number_px, "unit": o.unit, "true_unit": o.label.unit,
-                    "confidence": o.confidence,
+                    "confidence": o.confidence, "evidence": o.evidence,
                     "failure": None if o.failure is None else o.failure.to_dict()} for o in outcomes],
     }
     result["confidence"] = confidence_auc(outcomes)

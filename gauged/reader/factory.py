@@ -7,6 +7,7 @@ from pathlib import Path
 
 from gauged.config.model import ReaderConfig
 from gauged.reader.onnx_model import ModelNotAvailable, OnnxModel, packaged_model_path
+from gauged.reader.evidence import Calibration
 from gauged.reader.pipeline import GaugeReader
 from gauged.reader.stages.detect import GaugeDetector
 from gauged.reader.stages.notch_check import NotchCheck
@@ -61,4 +62,5 @@ def build_reader(config: ReaderConfig) -> GaugeReader:
     except OcrUnavailable as exc:  # OCR is optional when every gauge has a configured scale
         log.warning("OCR is not available (%s): gauges without a configured scale cannot be read", exc)
         ocr = None
-    return GaugeReader(crop, detector, ocr, config.min_confidence, notch_check=notch_check)
+    return GaugeReader(crop, detector, ocr, config.min_confidence, notch_check=notch_check,
+                       calibration=Calibration.load())

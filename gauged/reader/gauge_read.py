@@ -76,6 +76,8 @@ class GaugeRead:
     value: Value | None = None
     failure: StageFailure | None = None
     seconds: dict[str, float] = field(default_factory=dict)
+    look: str = "first"  # how the scale was found (gauged.reader.evidence.LOOKS)
+    checked_notches: bool = False  # read on the notch check's peaks (the last look at a ring refused)
 
     @property
     def scale(self) -> ScaleModel | None:

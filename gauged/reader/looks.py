@@ -123,4 +123,5 @@ class EndsLooks:
         if not low <= value.value <= high:
             return
         result.arc, result.needle, result.scales, result.value, result.failure = arc, needle, scales, value, None
+        result.look = "between_numbers"
         result.markers, result.units = read

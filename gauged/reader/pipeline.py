@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from gauged.reader.evidence import Calibration
 from gauged.reader.failures import OCR_UNAVAILABLE
 from gauged.reader.gauge_read import (
     GaugeRead,
@@ -61,8 +62,9 @@ class GaugeReader(EndsLooks):
 
     def __init__(self, crop_model: OnnxModel, detector: GaugeDetector | None = None,
                  ocr: ScaleTextReader | None = None, min_confidence: float = 0.5, crop_pad: float = 0.08,
-                 notch_check: NotchCheck | None = None):
+                 notch_check: NotchCheck | None = None, calibration: Calibration | None = None):
         self.crop_model = crop_model
+        self.calibration = calibration  # None: a reading's confidence is its trust
         self.notch_check = notch_check
         self.detector = detector
         self.ocr = ocr
@@ -109,7 +111,10 @@ class GaugeReader(EndsLooks):
                     read = again
                     break
                 read = again if _progress(again) > _progress(read) else read
-        return self._ring_of_checked_notches(image, read, known, primary_unit)
+        return self._calibrated(self._ring_of_checked_notches(image, read, known, primary_unit))
+
+    def _calibrated(self, read: GaugeRead) -> GaugeRead:
+        return read if self.calibration is None else self.calibration.apply(read)
 
     def _ring_of_checked_notches(self, image: np.ndarray, read: GaugeRead, known: KnownScale | None,
                                  primary_unit: str | None) -> GaugeRead:
@@ -125,6 +130,7 @@ class GaugeReader(EndsLooks):
                 or read.failure.reason != POOR_FIT):
             return read
         again = self._read_once(image, read.box, read.score, known, primary_unit, check_notches=True)
+        again.checked_notches = True
         return again if _progress(again) > _progress(read) else read
 
     def _read_once(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
@@ -157,7 +163,7 @@ class GaugeReader(EndsLooks):
             pivoted = self._about_pivot(image, crop, keypoints, arc, result, timer)
             if pivoted is not None:
                 arc, needle, scales = pivoted
-                result.arc, result.needle = arc, needle
+                result.arc, result.needle, result.look = arc, needle, "pivot"
                 primary_first(scales, primary_unit)
         if isinstance(scales, StageFailure):
             result.failure = scales
@@ -177,7 +183,7 @@ class GaugeReader(EndsLooks):
         The cheap steady-state path of a fixed camera: crop, crop model, needle, value — no ellipse
         fit, no OCR. ``keypoints.pivot`` is kept so the caller can check the dial has not moved.
         """
-        result = GaugeRead(box=box, score=1.0, arc=arc, scales=[scale])
+        result = GaugeRead(box=box, score=1.0, arc=arc, scales=[scale], look="locked")
         timer = _Timer(result.seconds)
         if not self._crop_and_keypoints(image, box, result, timer, require_notches=False):
             return result
@@ -194,7 +200,7 @@ class GaugeReader(EndsLooks):
             result.failure = value
         else:
             result.value = value
-        return result
+        return self._calibrated(result)
 
     def _read_on(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, timer: _Timer,
                  min_inliers: int = 3) -> tuple[MarkersRead, list[ScaleModel]] | None:
@@ -242,7 +248,7 @@ class GaugeReader(EndsLooks):
             scales = fit_scales(arc, markers, units, min_inliers=MIN_HINT_NUMBERS, hints=hints)
         if isinstance(scales, StageFailure) or across_zero(scales[0]):
             return None
-        result.markers, result.units = markers, units
+        result.markers, result.units, result.look = markers, units, "hint"
         return scales
 
     def _detail(self, image: np.ndarray, crop: Crop) -> np.ndarray | None:
@@ -280,6 +286,7 @@ class GaugeReader(EndsLooks):
     def _scales(self, image: np.ndarray, crop: Crop, keypoints: CropKeypoints, arc: ScaleArc, known: KnownScale | None,
                 primary_unit: str | None, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | StageFailure:
         if known is not None:
+            result.look = "known"
             return [scale_from_prior(arc, known.min_value, known.max_value, known.unit)]
         if self.ocr is None:
             return StageFailure("ocr", OCR_UNAVAILABLE, "no OCR engine and no configured scale")
@@ -300,6 +307,7 @@ class GaugeReader(EndsLooks):
                 retried = self._number_net_retry(crop, arc, numbers.points, detail, hints, timer)
                 if retried is not None:
                     (result.markers, units), scales = retried
+                    result.look = "number_net"
         result.units = units
         if isinstance(scales, StageFailure) and scales.stage in SECOND_LOOK:
             # The numbers read gave no scale: look again for the grid the ring's texts most likely
@@ -311,7 +319,7 @@ class GaugeReader(EndsLooks):
                 with timer("scale"):
                     retry = fit_scales(arc, again, units, hints=hints)
                 if not isinstance(retry, StageFailure):
-                    result.markers, scales = again, retry
+                    result.markers, scales, result.look = again, retry, "likely_scale"
         if isinstance(scales, StageFailure):
             scales = self._hint_look(image, crop, keypoints, arc, units, hints, result, timer) or scales
         if isinstance(scales, StageFailure):

@@ -24,6 +24,7 @@ class Value:
     value: float
     confidence: float
     position: float  # needle position along the scale: 0 at the start notch, 1 at the end notch
+    trust: float = 0.0  # the part scores' product that gates the reading; ``confidence`` may be calibrated from it
 
 
 def read_value(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel, min_confidence: float = 0.5,
@@ -47,7 +48,7 @@ def read_value(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel, min_conf
     confidence = _confidence(needle, arc, scale)
     if confidence < min_confidence:
         return StageFailure(STAGE, "low_confidence", f"confidence {confidence:.2f} < {min_confidence:g}")
-    return Value(value, confidence, float(position))
+    return Value(value, confidence, float(position), trust=confidence)
 
 
 def value_on(needle: NeedleReading, arc: ScaleArc, scale: ScaleModel) -> float:
