@@ -14,6 +14,7 @@ from gauged.reader.locate import GROW
 from gauged.reader.ocr.units import UNIT_SIZE
 from gauged.reader.onnx_model import OnnxModel, packaged_model_path
 from gauged.reader.pipeline import GaugeReader
+from gauged.reader.stages import ocr as ocr_stage
 from gauged.reader.stages.scale import fit_scales
 from gauged.synth.crop import render_crop
 from gauged.types import GaugeDetection, StageFailure
@@ -131,18 +132,24 @@ def _read_right(reader: GaugeReader, image: np.ndarray, gauge: dict, share: floa
     return read
 
 
-def test_a_refused_scale_gets_a_second_look_at_its_ring_texts():
+def test_a_refused_scale_gets_a_second_look_at_its_ring_texts(monkeypatch):
     """A -1..0 dial (engine render 39 of seed 7,000,000) whose numbers lose their minus signs and
-    decimal points: the first reading has two consistent numbers and is refused; the second look
-    (gauged.reader.ocr.likely_scale) finds the grid in the recogniser's probabilities and reads it."""
+    decimal points in the recogniser. Its minus signs show in the pixels (gauged.reader.ocr.minus_sign),
+    so the first reading reads it. Without that, the first reading has two consistent numbers and is
+    refused; the second look (gauged.reader.ocr.likely_scale) finds the grid in the recogniser's
+    probabilities and reads it."""
     reader = _full_reader(ocr_number_net=False)  # without the number net's retry, which runs before the second look
     image, record = _render(7_000_000, 39, jpeg=False)
     gauge = record["gauges"][0]
     assert (gauge["min"], gauge["max"]) == (-1.0, 0.0)
     read = _read_right(reader, image, gauge)
     assert len(read.markers) >= 4 and all(m.value <= 0 for m in read.markers)
-    # the first reading's numbers alone make no clockwise scale: the second look is what reads it (their
-    # counter-clockwise line would overrule the minus signs read on "-1.0" and "-0.4", so it is not taken)
+
+    monkeypatch.setattr(ocr_stage, "with_seen_minus", lambda texts, image: texts)
+    monkeypatch.setattr(ocr_stage, "shows_minus", lambda line: False)
+    read = _read_right(reader, image, gauge)  # the second look, with no minus seen in pixels
+    assert all(m.value <= 0 for m in read.markers)
+    # the first reading's numbers alone make no clockwise scale: the second look is what reads it
     reader.ocr.reread_markers = lambda *args, **kwargs: None
     (first,) = reader.read_image(image)
     clockwise = fit_scales(first.arc, first.markers)

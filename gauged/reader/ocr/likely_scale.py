@@ -75,6 +75,8 @@ class RingText:
     angle: float
     radius: float
     readings: dict[str, Recognition]
+    minus: dict[str, bool] = field(default_factory=dict)  # per orientation: the line's pixels show a minus
+    # (gauged.reader.ocr.minus_sign), read or not
 
 
 @dataclass
@@ -84,6 +86,7 @@ class _Candidate:
     best: float  # log-likelihood of the reading's own best number string
     parsed: ParsedNumber | None  # the number that string gives
     cache: dict[tuple[float, int], tuple[float, str, bool]] = field(default_factory=dict)
+    minus: bool = False  # its pixels show a minus sign (gauged.reader.ocr.minus_sign)
 
 
 def decimals(step: float) -> int:
@@ -116,7 +119,7 @@ def _likelihood(candidate: _Candidate, value: float, places: int, score: Score) 
     the sign costs the grid's score: :data:`UNSIGNED` for a minus not seen, :data:`OVERRULED` for a
     positive value on a text that shows one (:data:`MINUS_SEEN`). The two costs keep the mirror
     grids of one ring apart: its texts "30, 25 ... 0" clockwise print 0..30 rising counter-clockwise,
-    or -30..0 rising clockwise with every minus unread; the signs seen decide."""
+    or -30..0 rising clockwise with every minus unread; the signs seen decide (read, or in the pixels)."""
     key = (round(value, 9), places)
     if key not in candidate.cache:
         signed, unsigned = spellings(value, places)
@@ -124,7 +127,9 @@ def _likelihood(candidate: _Candidate, value: float, places: int, score: Score) 
         options += [(score(candidate.reading, s) - UNSIGNED, "-" + s, False) for s in unsigned]
         likelihood, spelling, with_sign = max(options)
         cost = 0.0 if with_sign else UNSIGNED  # (already in the likelihood of an unsigned spelling)
-        if value > 0 and max(score(candidate.reading, "-" + s) for s in signed) >= likelihood - MINUS_SEEN:
+        if not with_sign and candidate.minus:  # a minus in its pixels that the recogniser dropped
+            likelihood, with_sign, cost = likelihood + UNSIGNED, True, 0.0
+        if value > 0 and (candidate.minus or max(score(candidate.reading, "-" + s) for s in signed) >= likelihood - MINUS_SEEN):
             cost = OVERRULED
         candidate.cache[key] = (likelihood, spelling, with_sign, cost)
     return candidate.cache[key]
@@ -192,8 +197,11 @@ def _grid_markers(candidates: Sequence[_Candidate], first: tuple[int, float], se
             continue
         key = (len(agreeing), sum(a[3] for a in agreeing))
         if best is None or key > best[0]:
-            markers = [ScaleMarker(_own_text(candidates[k], value, spelling), float(value), candidates[k].text.box)
-                       for k, value, spelling, _, _ in agreeing]
+            # a negative value whose minus no one saw keeps the text as read, unsigned: the scale stage
+            # counts the sign it adds against the grid (gauged.reader.stages.scale.sign_edits)
+            markers = [ScaleMarker(_own_text(candidates[k], value, spelling if signed else spelling.lstrip("-")),
+                                   float(value), candidates[k].text.box)
+                       for k, value, spelling, _, signed in agreeing]
             best = (key, markers)
     return best
 
@@ -220,7 +228,7 @@ def likely_markers(views: Sequence[Sequence[RingText]], start: float, end: float
                 reading = text.readings.get(orientation)
                 if reading is not None:
                     own = score(reading, reading.digits) if reading.digits else -math.inf
-                    candidates.append(_Candidate(text, reading, own, _parsed(reading)))
+                    candidates.append(_Candidate(text, reading, own, _parsed(reading), minus=text.minus.get(orientation, False)))
             anchors = _anchors(candidates)
             decimal_seen = any(c.parsed is not None and c.parsed.decimals > 0 for c in candidates)
             for first in anchors:

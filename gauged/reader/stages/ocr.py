@@ -58,6 +58,7 @@ from gauged.reader.ocr.units import (
     PrintedUnit,
     printed_units,
 )
+from gauged.reader.ocr.minus_sign import shows_minus, with_seen_minus
 from gauged.reader.stages.crop import Crop
 from gauged.reader.stages.ellipse import ScaleArc
 from gauged.reader.stages.keypoints import Peaks
@@ -115,7 +116,8 @@ class ScaleTextReader(DialTextReader):
                 centre = np.array([[(box[0] + box[2]) / 2, (box[1] + box[3]) / 2]])
                 angle = float(unwrap(float(dial_angle(arc.ellipse, centre, arc.centre)[0]), arc.zero_angle))
                 radius = math.dist(quad.mean(axis=0), circle[:2]) / circle[2]
-                texts.append(RingText(box, angle, radius, {"upright": readings[2 * n], "radial": readings[2 * n + 1]}))
+                texts.append(RingText(box, angle, radius, {"upright": readings[2 * n], "radial": readings[2 * n + 1]},
+                                      {"upright": shows_minus(lines[2 * n]), "radial": shows_minus(lines[2 * n + 1])}))
             views.append(texts)
         return views
 
@@ -166,7 +168,7 @@ class ScaleTextReader(DialTextReader):
             other = self._read_view(crop, arc, hints, detail, downs[1])
             if other.agreeing() > view.agreeing():
                 view = other
-        texts, circle, matrix = view.texts, view.circle, view.matrix
+        texts, circle, matrix = with_seen_minus(view.texts, view.image), view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, NO_TEXT, "no text found on the rectified dial")
         units = printed_units(texts, circle)

@@ -48,6 +48,7 @@ END_WEIGHT = 2.0  # how many numbers each end counts as in the line fitted again
 # 300 dev renders a mean error of 0.327, 0.329, 0.330%, the 21 real photos 0.55, 0.50, 0.46%)
 CLEARLY_MORE = 1  # evidence (distinct agreeing numbers less sign edits) by which a counter-clockwise
 # line must beat a clockwise one: a tie stays clockwise
+SIGNS_EVIDENCE = 3  # distinct agreeing numbers less sign edits a line that overrules read minus signs must keep
 RETRY_ZERO_MARGIN = 0.05  # of the span: a fitted end this far past zero is on the other side of it
 
 
@@ -236,10 +237,24 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, directio
         return model
     counter = _checked_ring(arc, _signs_as_read(ring), min_inliers, -1)
     if isinstance(counter, StageFailure):
-        return model
+        return _signs_upheld(model)
     if isinstance(model, StageFailure):
         return counter if sign_edits(counter) == 0 else model
-    return counter if _evidence(counter) >= _evidence(model) + CLEARLY_MORE else model
+    return counter if _evidence(counter) >= _evidence(model) + CLEARLY_MORE else _signs_upheld(model)
+
+
+def _signs_upheld(model: ScaleModel | StageFailure) -> ScaleModel | StageFailure:
+    """``model``, unless it overrules minus signs read and keeps fewer than :data:`SIGNS_EVIDENCE`
+    distinct numbers of evidence once they are counted against it: a -1..0 scale rising
+    counter-clockwise whose fit that way failed (a number missed, a minus unseen) is otherwise read as
+    0..1 clockwise, the right magnitude with the wrong sign."""
+    if isinstance(model, StageFailure):
+        return model
+    edits = sign_edits(model)
+    if edits and _evidence(model) < SIGNS_EVIDENCE:
+        return StageFailure(STAGE, "wrong_slope_sign", f"the line takes {edits} minus sign(s) read for ticks, "
+                            f"leaving {_evidence(model)} distinct numbers of evidence, need {SIGNS_EVIDENCE}")
+    return model
 
 
 def sign_edits(model: ScaleModel) -> int:

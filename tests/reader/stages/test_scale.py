@@ -317,3 +317,17 @@ def test_a_clockwise_dial_keeps_its_direction_when_a_tick_reads_as_a_minus():
     texts = ["0", "1", "-2", "3", "4", "5", "6", "7", "8", "9", "10"]  # a tick before the "2"
     (scale,) = fit_scales(arc, _ring(DIAL, [float(t) for t in texts], 1.15))
     assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 10.0))
+
+
+def test_a_line_overruling_a_read_minus_sign_on_little_evidence_is_refused():
+    """Three numbers of a -1..0 dial rising counter-clockwise, one read with its minus ("0.2, -0.4,
+    0.6"): the counter-clockwise line fails, and the clockwise 0..1 line would take the minus for a
+    tick with only two numbers of evidence left. The right magnitude with the wrong sign is refused."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    read = _counter_clockwise_vacuum([("0.0", 0.0), ("0.2", 0.2), ("-0.4", 0.4), ("0.6", 0.6), ("", 0.0), ("", 0.0)])
+    ring = [m for m in read if m.text][1:]
+    failure = fit_scales(arc, ring)
+    assert isinstance(failure, StageFailure) and failure.reason == "wrong_slope_sign", failure
+    # the same three numbers with no minus read are a clockwise scale, taken as read
+    (scale,) = fit_scales(arc, [replace(m, text=m.text.lstrip("-")) for m in ring])
+    assert scale.slope > 0
