@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from gauged.reader.gauge_read import GaugeRead
+from gauged.reader.ocr.numbers import MINUS_LIKE
+from gauged.reader.stages.scale import added_signs, overruled_signs
 
 # How the reading's scale was found (GaugeRead.look), most direct first.
 LOOKS = ("first", "number_net", "likely_scale", "hint", "pivot", "between_numbers", "known", "locked")
@@ -47,6 +49,9 @@ def evidence(read: GaugeRead) -> dict[str, float]:
         "coverage": (max(values) - min(values)) / span if len(values) >= 2 else 0.0,
         "number_score": float(np.mean([m.score for m in agreeing])) if agreeing else 1.0,
         "negative_numbers": float(any(v < 0 for v in values)),
+        "signs_overruled": float(overruled_signs(scale)),
+        "signs_added": float(added_signs(scale)),
+        "minus_read": float(sum(m.text.strip()[:1] in MINUS_LIKE for m in read.markers if m.text.strip())),
         "decimal_numbers": float(any("." in m.text or "," in m.text for m in agreeing)),
         "falling": float(scale.slope < 0),
         "full_circle": float(scale.full_circle),

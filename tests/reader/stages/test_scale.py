@@ -331,3 +331,17 @@ def test_a_line_overruling_a_read_minus_sign_on_little_evidence_is_refused():
     # the same three numbers with no minus read are a clockwise scale, taken as read
     (scale,) = fit_scales(arc, [replace(m, text=m.text.lstrip("-")) for m in ring])
     assert scale.slope > 0
+
+
+def test_a_vacuum_dial_with_some_minus_signs_read_is_read_negative():
+    """A -30..0 dial rising counter-clockwise read "0, 5, -15, -20, 30" (two minus signs seen, three
+    dropped): clockwise, the line overrules two read signs; counter-clockwise with every number
+    negative it adds three unread ones, which costs less. A single read minus is a tick."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    texts = ["0", "5", None, "-15", "-20", None, "30"]
+    ring = [m for m in _counter_clockwise_vacuum([(t or "", abs(float(t or 0))) for t in texts]) if m.text]
+    (scale,) = fit_scales(arc, ring)
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((-30.0, 0.0), abs=1e-6)
+    one = [replace(m, text="15") if m.text == "-15" else m for m in ring]  # "0, 5, 15, -20, 30"
+    (scale,) = fit_scales(arc, one)
+    assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 30.0), abs=1e-6)
