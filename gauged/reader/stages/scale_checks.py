@@ -102,12 +102,18 @@ def _irregular(model: ScaleModel) -> StageFailure | None:
 
 def _regular(values: np.ndarray) -> bool:
     """Are the sorted distinct ``values`` steps of one progression (every difference a whole multiple
-    of the smallest)? Fewer than three always are."""
+    of the smallest), at most :data:`GRID_MAX_STEPS` of them from first to last? Fewer than three
+    always are.
+
+    Any difference is a whole multiple of a small enough one: "0.4, 1, 1867" (a number read off the
+    face beside two of a 0..0.6 dial) step by 0.6 three thousand times, and their line read 1462 for
+    0.01. A dial prints its numbers a few steps apart."""
     if len(values) < 3:
         return True
     diffs = np.diff(values)
     multiples = diffs / diffs.min()
-    return bool(np.abs(multiples - np.round(multiples)).max() <= STEP_TOLERANCE)
+    return bool(np.abs(multiples - np.round(multiples)).max() <= STEP_TOLERANCE
+                and multiples.sum() <= GRID_MAX_STEPS + STEP_TOLERANCE)
 
 
 def _off_printed_grid(model: ScaleModel) -> StageFailure | None:

@@ -165,6 +165,21 @@ def test_agreeing_numbers_that_are_not_steps_of_one_progression_are_irregular():
     assert not isinstance(fit_scales(arc, _ring(DIAL, values, 0.8, [1, 3, 4, 6])), StageFailure)
 
 
+def test_numbers_thousands_of_steps_apart_are_irregular():
+    """"0.4" and "1" side by side where a dial's scale starts and "1867" (a number off the face) at
+    its end: 0.6 divides 1866, but three thousand steps are no printed scale (its line read 1462 for
+    0.01 on a 0..0.6 dial)."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+
+    def at(text: str, share: float, radius: float) -> ScaleMarker:
+        x, y = point_at_dial_angle(DIAL.ellipse.scaled(radius), math.radians(DIAL.start_deg + DIAL.span_deg * share))[0]
+        return ScaleMarker(text, float(text), (x - 6, y - 5, x + 6, y + 5))
+
+    failure = fit_scales(arc, [at("0.4", 0.4 / 1867, 0.8), at("1", 1 / 1867, 0.65), at("1867", 1.0, 0.8)])
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "irregular_numbers")
+
+
 def _centres(dial: Dial, steps: list[int], radius: float = 0.8) -> np.ndarray:
     """Printed-number centres (the crop model's hints) at the dial's major notches ``steps``."""
     return np.vstack([_point(dial, k, radius, dial.majors - 1) for k in steps])
