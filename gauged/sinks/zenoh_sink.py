@@ -13,7 +13,8 @@ Keys (``<prefix>`` from ``outputs.zenoh.prefix``; payloads JSON, encoding ``appl
 - liveliness token ``<prefix>/@alive/<node>`` while the sink is open;
 - commands: a ``get`` or a ``put`` on ``<prefix>/<gauge>/alarm/<kind>`` (``ack``, ``shelve``,
   ``unshelve``: :data:`gauged.alarms.commands.COMMAND_KINDS`) calls the app's
-  ``on_command(gauge, kind, payload_bytes) -> reply dict``; a get receives that dict as
+  ``on_command(gauge, kind, payload_bytes) -> reply dict``, for its own ``gauges`` only when it was
+  given them (the other daemons of the site answer for theirs); a get receives that dict as
   its reply (or a reply error), a put's result is logged. Only exact keys are commands: a wildcard
   get such as ``<prefix>/**`` never acknowledges anything. ``on_command`` runs on a Zenoh thread, so
   it must be quick and thread-safe.
@@ -109,7 +110,8 @@ class ZenohSink(SinkBase):
         command = self._command_of(key)
         try:
             if command is not None:
-                self._answer_command(query, key, *command)
+                if self._owns(command[0]):
+                    self._answer_command(query, key, *command)
                 return
             with self._lock:
                 readings = dict(self._readings)
@@ -123,6 +125,11 @@ class ZenohSink(SinkBase):
                     query.reply(alarm_key, to_json(state), encoding=JSON)
         except Exception:  # noqa: BLE001 - never raise into Zenoh's thread
             log.exception("zenoh sink: answering query %s failed", key)
+
+    def _owns(self, gauge: str) -> bool:
+        """A sink told its gauges leaves the others' commands to the daemons that own them (several
+        daemons share one prefix, and a get's consolidation keeps one reply per key)."""
+        return not self._gauges or gauge in self._gauges
 
     def _answer_command(self, query: zenoh.Query, key: str, gauge: str, command: str) -> None:
         if self._on_command is None:
@@ -140,7 +147,8 @@ class ZenohSink(SinkBase):
 
     def _on_command_put(self, sample: zenoh.Sample) -> None:
         command = self._command_of(str(sample.key_expr))
-        if command is None or self._on_command is None or sample.kind != zenoh.SampleKind.PUT:
+        if command is None or self._on_command is None or sample.kind != zenoh.SampleKind.PUT \
+                or not self._owns(command[0]):
             return
         try:
             reply = self._on_command(command[0], command[1], sample.payload.to_bytes())

@@ -148,3 +148,15 @@ def test_queryable_uses_the_apps_alarm_state_and_knows_configured_gauges(sink_of
 def test_alarm_commands_without_handler_are_refused(sink_of):
     _, peer = sink_of()
     assert get(peer, f"{PREFIX}/a/alarm/ack") == {"error": {"error": "alarm commands are not enabled"}}
+
+
+def test_a_sink_given_its_gauges_leaves_other_gauges_commands_to_their_daemons(sink_of):
+    """Several daemons share a prefix: only the owner may answer, or a refusal could win the get."""
+    calls = []
+    _, peer = sink_of(gauges=["a"], on_command=lambda g, c, p: calls.append((g, c)) or {"ok": True})
+    assert get(peer, f"{PREFIX}/a/alarm/ack") == {f"{PREFIX}/a/alarm/ack": {"ok": True}}
+    assert get(peer, f"{PREFIX}/b/alarm/ack") == {}
+    peer.put(f"{PREFIX}/b/alarm/shelve", b"{}")
+    peer.put(f"{PREFIX}/a/alarm/shelve", b"{}")
+    assert wait_for(lambda: len(calls) == 2)
+    assert calls == [("a", "ack"), ("a", "shelve")]
