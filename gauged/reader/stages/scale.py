@@ -296,9 +296,12 @@ def added_signs(model: ScaleModel) -> int:
 
 
 def _signs_as_read(ring: list[ScaleMarker]) -> list[ScaleMarker]:
-    """The markers with the signs their texts show (a reader blind to minus signs, the number net,
-    gives "-10" the value 10)."""
-    return [replace(m, value=-m.value) if m.value > 0 and _read_negative(m.text) else m for m in ring]
+    """The markers with the signs their texts show: a reader blind to minus signs (the number net)
+    gives "-10" the value 10, and the likeliest number grid gives "1.2" the value -1.2 when it took
+    the ring for a scale of negatives whose minus signs went unseen (one "-1.4" read on a 0..1.6
+    dial rising counter-clockwise made it -1.6..0 clockwise)."""
+    return [replace(m, value=-m.value) if (m.value > 0) == _read_negative(m.text) and m.value != 0 else m
+            for m in ring]
 
 
 def _read_negative(text: str) -> bool:

@@ -360,3 +360,16 @@ def test_a_vacuum_dial_with_some_minus_signs_read_is_read_negative():
     one = [replace(m, text="15") if m.text == "-15" else m for m in ring]  # "0, 5, 15, -20, 30"
     (scale,) = fit_scales(arc, one)
     assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 30.0), abs=1e-6)
+
+
+def test_negative_values_given_to_unsigned_texts_are_read_as_printed():
+    """A 0..1.6 dial rising counter-clockwise with one tick read as a minus ("-1.4"): a number grid that
+    took the ring for negatives with unseen minus signs valued every number negative, which read
+    clockwise is -1.6..0. The texts show one minus, so the values are the printed ones, rising
+    counter-clockwise."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    printed = [1.6, 1.4, 1.2, 1.0, 0.8, 0.6, 0.4, 0.2, 0.0]
+    texts = [("-" if v == 1.4 else "") + f"{v:.1f}" for v in printed]
+    ring = _counter_clockwise_vacuum([(t, -v) for t, v in zip(texts, printed)])
+    (scale,) = fit_scales(arc, ring)
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 1.6), abs=1e-6)
