@@ -182,8 +182,8 @@ class Hmi:
         """key -> JSON body of every ok reply (only readings and alarm states for a wildcard)."""
         body = None if payload is None else json.dumps(payload)
         replies = self.session.get(selector, payload=body, timeout=10)
-        return {str(r.ok.key_expr): json.loads(r.ok.payload.to_bytes()) for r in replies if r.ok is not None
-                if str(r.ok.key_expr).endswith(("/reading", "/alarm", "/ack", "/shelve"))}
+        return {str(r.ok.key_expr): json.loads(r.ok.payload.to_bytes()) for r in replies
+                if r.ok is not None and str(r.ok.key_expr).endswith(("/reading", "/alarm", "/ack", "/shelve"))}
 
 
 def wait_until(condition: Callable[[], object], timeout: float, what: str, edges: tuple[Edge, ...] = ()) -> None:
