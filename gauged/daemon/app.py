@@ -20,7 +20,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,6 +30,7 @@ from gauged.daemon.gauge_runner import GaugeOutput, GaugeRunner, Reader
 from gauged.metrics import Metrics
 from gauged.reader.failures import failure_pairs
 from gauged.sinks import BufferedSink, open_sinks
+from gauged.sinks.annotations import frame_annotations
 from gauged.sources import make_source
 from gauged.tracking.state_file import restore_tracker, save_tracker
 from gauged.tracking.tracker import GaugeTracker
@@ -182,6 +183,14 @@ class Daemon:
         self._publish(output.reading, output.events, output.failure, frame.camera)
         with self._status_lock:
             self.status.locked[gauge] = output.locked
+
+    def frame_read(self, frame: Frame, outputs: Sequence[GaugeOutput]) -> None:
+        """Publish the overlays of one frame (each gauge's geometry and value) to the sinks that take them."""
+        sinks = [sink for sink in self.sinks if sink.annotations]
+        if sinks and outputs:
+            overlays = frame_annotations(outputs, frame.stamp_ns, frame.size)
+            for sink in sinks:
+                sink.publish_annotations(frame.camera, frame.stamp_ns, overlays)
 
     def _publish(self, reading: Reading | None, events, failure, camera: str) -> None:
         for sink in self.sinks:

@@ -34,6 +34,7 @@ class Publisher(Protocol):
     """Where a worker's results go (the app fans them out to the sinks)."""
 
     def gauge_output(self, frame: Frame, output: GaugeOutput) -> None: ...
+    def frame_read(self, frame: Frame, outputs: Sequence[GaugeOutput]) -> None: ...
 
 
 class CameraWorker:
@@ -96,11 +97,14 @@ class CameraWorker:
     def read_frame(self, frame: Frame) -> None:
         """Read every gauge of this camera on ``frame`` and publish the outputs."""
         boxes = self._boxes(frame)
+        outputs = []
         for runner in self.runners:
             box, score = boxes.get(runner.gauge, (None, 0.0))
             output = runner.process(frame, box, score)
             self.metrics.reads.labels(gauge=runner.gauge).inc()
             self.publisher.gauge_output(frame, output)
+            outputs.append(output)
+        self.publisher.frame_read(frame, outputs)  # the frame's overlays, every gauge's in one message
 
     def _boxes(self, frame: Frame) -> dict[str, tuple[Box | None, float]]:
         boxes: dict[str, tuple[Box | None, float]] = {}

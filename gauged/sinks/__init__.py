@@ -56,7 +56,7 @@ def open_sinks(outputs: OutputsConfig, *, metrics: Metrics, session: zenoh.Sessi
             from gauged.sinks.zenoh_sink import ZenohSink
 
             zenoh_sink = ZenohSink(session, outputs.zenoh.prefix, node, gauges=gauges, on_command=on_command,
-                                   alarm_state=alarm_state)
+                                   alarm_state=alarm_state, annotations=outputs.zenoh.annotations)
             opened.append(BufferedSink(zenoh_sink, metrics))
     except Exception:
         for sink in reversed(opened):

@@ -11,6 +11,9 @@ Calls the app makes (through the wrapper):
 - ``publish_alarm(event)`` for every alarm state change, the DESIGN dict
   ``{gauge, stamp_ns, level, state, value, limit, message}``;
 - ``publish_image(camera, stamp_ns, image)`` for annotated images (BGR uint8), when enabled;
+- ``publish_annotations(camera, stamp_ns, overlays)`` once per camera frame, to the plugins whose
+  ``annotations`` is true: each gauge's ``foxglove.ImageAnnotations`` message, by gauge id
+  (:mod:`gauged.sinks.annotations`);
 - ``close()`` once, at stop.
 """
 
@@ -27,6 +30,7 @@ from gauged.alarms.lifecycle import AlarmState
 from gauged.types import Reading, StageFailure
 
 AlarmEvent = Mapping[str, Any]
+Overlays = Mapping[str, Mapping[str, Any]]  # gauge id -> foxglove.ImageAnnotations message
 
 
 class Sink(Protocol):
@@ -38,6 +42,7 @@ class Sink(Protocol):
     def publish_failure(self, gauge: str, camera: str, stamp_ns: int, failure: StageFailure) -> None: ...
     def publish_alarm(self, event: AlarmEvent) -> None: ...
     def publish_image(self, camera: str, stamp_ns: int, image: np.ndarray) -> None: ...
+    def publish_annotations(self, camera: str, stamp_ns: int, overlays: Overlays) -> None: ...
     def flush(self) -> None: ...
     def close(self) -> None: ...
 
@@ -47,6 +52,7 @@ class SinkBase:
 
     name = "sink"
     flush_interval_s: float | None = None  # the wrapper calls flush() this often when set
+    annotations = False  # the app builds image overlays only when some plugin publishes them
 
     def publish_reading(self, reading: Reading) -> None:
         """Publish one reading."""
@@ -59,6 +65,9 @@ class SinkBase:
 
     def publish_image(self, camera: str, stamp_ns: int, image: np.ndarray) -> None:
         """Publish one annotated image (H, W, 3) uint8 BGR."""
+
+    def publish_annotations(self, camera: str, stamp_ns: int, overlays: Overlays) -> None:
+        """Publish the overlays of one camera frame (each gauge's, by gauge id)."""
 
     def flush(self) -> None:
         """Make everything published so far durable or visible."""

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from gauged.metrics import Metrics
-from gauged.sinks.base import AlarmEvent, SinkBase
+from gauged.sinks.base import AlarmEvent, Overlays, SinkBase
 from gauged.types import Reading, StageFailure
 
 log = logging.getLogger(__name__)
@@ -61,6 +61,14 @@ class BufferedSink:
 
     def publish_image(self, camera: str, stamp_ns: int, image: np.ndarray) -> None:
         self._put("publish_image", (camera, stamp_ns, image))
+
+    def publish_annotations(self, camera: str, stamp_ns: int, overlays: Overlays) -> None:
+        self._put("publish_annotations", (camera, stamp_ns, overlays))
+
+    @property
+    def annotations(self) -> bool:
+        """Whether the plugin publishes image overlays."""
+        return bool(self.sink.annotations)
 
     def _put(self, method: str, args: tuple[Any, ...]) -> None:
         dropped = 0

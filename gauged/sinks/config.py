@@ -13,6 +13,8 @@ class ZenohSinkConfig(BaseModel):
 
     enabled: bool = Field(True, description="Publish readings and alarms on Zenoh.")
     prefix: str = Field("gauged", min_length=1, description="Key prefix: readings go to <prefix>/<gauge>/reading.")
+    annotations: bool = Field(
+        True, description="Put each gauge's overlay (foxglove.ImageAnnotations) on <prefix>/<gauge>/annotations.")
 
     @field_validator("prefix")
     @classmethod
@@ -31,6 +33,8 @@ class McapSinkConfig(BaseModel):
     rotate_s: float = Field(3600.0, gt=0, description="Start a new file after this many seconds of frame time.")
     images: Literal["none", "annotated"] = Field(
         "none", description="Also log annotated camera images on /gauged/<camera>/annotated.")
+    annotations: bool = Field(
+        True, description="Log the readings' overlays (foxglove.ImageAnnotations) on /gauged/<camera>/annotations.")
     chunk_kb: int = Field(
         64, ge=4, le=65536, description="Size of a zstd chunk (KiB); a crash loses at most the chunk being filled.")
     flush_s: float = Field(

@@ -3,11 +3,15 @@
 Foxglove and Lichtblick read these without a plugin: plot ``/gauged/readings.value`` (one gauge:
 ``/gauged/readings{gauge=="boiler-pressure"}.value``), list ``/gauged/failures`` and
 ``/gauged/alarms`` in a Raw Messages or Table panel, and show ``/gauged/<camera>/annotated`` in an
-Image panel.
+Image panel. ``/gauged/<camera>/annotations`` (``foxglove.ImageAnnotations``, the schema Foxglove
+publishes, vendored in ``foxglove_schemas/``) overlays the readings on the camera's own image
+topic: open the camera recording with the gauged file and tick the channel in the Image panel.
 """
 
 from __future__ import annotations
 
+import json
+from importlib.resources import files
 from typing import Any
 
 READINGS_TOPIC = "/gauged/readings"
@@ -17,6 +21,10 @@ ALARMS_TOPIC = "/gauged/alarms"
 
 def annotated_topic(camera: str) -> str:
     return f"/gauged/{camera}/annotated"
+
+
+def annotations_topic(camera: str) -> str:
+    return f"/gauged/{camera}/annotations"
 
 
 _NUMBER_OR_NULL = {"type": ["number", "null"]}
@@ -89,3 +97,6 @@ COMPRESSED_IMAGE_SCHEMA: dict[str, Any] = {
         "format": {"type": "string"},
     },
 }
+
+IMAGE_ANNOTATIONS_SCHEMA: dict[str, Any] = json.loads(
+    files("gauged.sinks").joinpath("foxglove_schemas/ImageAnnotations.json").read_text(encoding="utf-8"))

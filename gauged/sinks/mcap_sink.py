@@ -2,7 +2,10 @@
 
 Channels (see :mod:`gauged.sinks.mcap_schemas`): ``/gauged/readings``, ``/gauged/failures`` and
 ``/gauged/alarms`` with JSON schemas and JSON messages, registered in every file; and, with
-``images: annotated``, ``/gauged/<camera>/annotated`` as ``foxglove.CompressedImage`` (JPEG).
+``images: annotated``, ``/gauged/<camera>/annotated`` as ``foxglove.CompressedImage`` (JPEG); and,
+with ``annotations: true`` (the default), ``/gauged/<camera>/annotations``, one
+``foxglove.ImageAnnotations`` per camera frame holding every gauge's overlay
+(:mod:`gauged.sinks.annotations`), registered at the camera's first frame.
 ``log_time`` and ``publish_time`` are the frame time ``stamp_ns``, so a replay writes the same data.
 
 Durability: chunks are zstd-compressed and small (``chunk_kb``), and the wrapper calls
@@ -31,7 +34,8 @@ from mcap.writer import CompressionType, Writer
 
 from gauged.metrics import gauged_version
 from gauged.sinks import mcap_schemas as schemas
-from gauged.sinks.base import AlarmEvent, SinkBase, failure_record, to_json
+from gauged.sinks.annotations import merge
+from gauged.sinks.base import AlarmEvent, Overlays, SinkBase, failure_record, to_json
 from gauged.sinks.config import McapSinkConfig
 from gauged.types import Reading, StageFailure
 
@@ -50,12 +54,13 @@ class McapSink(SinkBase):
 
     def __init__(self, directory: str | Path, *, rotate_mb: float = 256.0, rotate_s: float = 3600.0,
                  images: str = "none", chunk_kb: int = 64, flush_s: float = 2.0,
-                 name_prefix: str = "gauged", jpeg_quality: int = 85) -> None:
+                 name_prefix: str = "gauged", jpeg_quality: int = 85, annotations: bool = True) -> None:
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.rotate_bytes = int(rotate_mb * 1024 * 1024)
         self.rotate_ns = int(rotate_s * 1e9)
         self.images = images
+        self.annotations = annotations
         self.chunk_bytes = int(chunk_kb * 1024)
         self.flush_interval_s = flush_s
         self.name_prefix = name_prefix
@@ -70,7 +75,8 @@ class McapSink(SinkBase):
     @classmethod
     def from_config(cls, config: McapSinkConfig, name_prefix: str = "gauged") -> McapSink:
         return cls(config.dir, rotate_mb=config.rotate_mb, rotate_s=config.rotate_s, images=config.images,
-                   chunk_kb=config.chunk_kb, flush_s=config.flush_s, name_prefix=name_prefix)
+                   chunk_kb=config.chunk_kb, flush_s=config.flush_s, name_prefix=name_prefix,
+                   annotations=config.annotations)
 
     def publish_reading(self, reading: Reading) -> None:
         self._write(schemas.READINGS_TOPIC, reading.stamp_ns, reading.to_dict())
@@ -91,6 +97,11 @@ class McapSink(SinkBase):
         record = {"timestamp": {"sec": sec, "nsec": nsec}, "frame_id": camera,
                   "data": base64.b64encode(jpeg.tobytes()).decode("ascii"), "format": "jpeg"}
         self._write(schemas.annotated_topic(camera), stamp_ns, record, schemas.COMPRESSED_IMAGE_SCHEMA)
+
+    def publish_annotations(self, camera: str, stamp_ns: int, overlays: Overlays) -> None:
+        if self.annotations:  # one message per frame: the Image panel shows one per topic and time
+            self._write(schemas.annotations_topic(camera), stamp_ns, merge(stamp_ns, overlays.values()),
+                        schemas.IMAGE_ANNOTATIONS_SCHEMA)
 
     def _write(self, topic: str, stamp_ns: int, record: Any, schema: dict[str, Any] | None = None) -> None:
         stamp_ns = int(stamp_ns)

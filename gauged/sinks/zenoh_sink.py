@@ -4,6 +4,11 @@ Keys (``<prefix>`` from ``outputs.zenoh.prefix``; payloads JSON, encoding ``appl
 
 - put ``<prefix>/<gauge>/reading``: the reading contract (:meth:`gauged.types.Reading.to_dict`);
 - put ``<prefix>/<gauge>/alarm``: each alarm state change, as the app's event dict;
+- put ``<prefix>/<gauge>/annotations`` (with ``annotations``, the default): the gauge's overlay on
+  each frame of its camera, a ``foxglove.ImageAnnotations`` message stamped with the image's time
+  (:mod:`gauged.sinks.annotations`; encoding ``application/json;foxglove.ImageAnnotations``). Per
+  gauge, not per camera, because gauge ids are what is unique among the daemons sharing a prefix;
+  a viewer ticks the overlays of the gauges it shows. The queryable does not answer them;
 - queryable ``<prefix>/**``: answers a ``get`` with one reply per matching key: the latest reading
   on ``<prefix>/<gauge>/reading`` and the alarm state on ``<prefix>/<gauge>/alarm`` (one document
   per key, because a get's default consolidation keeps one reply per key). The alarm state is what
@@ -30,7 +35,7 @@ from typing import Any
 import zenoh
 
 from gauged.alarms.commands import COMMAND_KINDS
-from gauged.sinks.base import AlarmEvent, SinkBase, alarm_is_active, to_json
+from gauged.sinks.base import AlarmEvent, Overlays, SinkBase, alarm_is_active, to_json
 from gauged.types import Reading
 
 log = logging.getLogger(__name__)
@@ -38,6 +43,7 @@ log = logging.getLogger(__name__)
 CommandHandler = Callable[[str, str, bytes], Mapping[str, Any]]
 AlarmStateProvider = Callable[[str], Mapping[str, Any] | None]
 JSON = zenoh.Encoding.APPLICATION_JSON
+ANNOTATIONS_JSON = JSON.with_schema("foxglove.ImageAnnotations")
 
 
 class ZenohSink(SinkBase):
@@ -46,8 +52,10 @@ class ZenohSink(SinkBase):
     name = "zenoh"
 
     def __init__(self, session: zenoh.Session, prefix: str, node: str, *, gauges: Iterable[str] = (),
-                 on_command: CommandHandler | None = None, alarm_state: AlarmStateProvider | None = None) -> None:
+                 on_command: CommandHandler | None = None, alarm_state: AlarmStateProvider | None = None,
+                 annotations: bool = True) -> None:
         self.prefix = prefix
+        self.annotations = annotations
         self._session = session
         self._on_command = on_command
         self._alarm_state = alarm_state
@@ -73,10 +81,15 @@ class ZenohSink(SinkBase):
             self._alarms.setdefault(gauge, {})[str(event.get("level", ""))] = dict(event)
         self._publisher(f"{self.prefix}/{gauge}/alarm").put(to_json(event))
 
-    def _publisher(self, key: str) -> Any:
+    def publish_annotations(self, camera: str, stamp_ns: int, overlays: Overlays) -> None:
+        if self.annotations:
+            for gauge, message in overlays.items():
+                self._publisher(f"{self.prefix}/{gauge}/annotations", ANNOTATIONS_JSON).put(to_json(message))
+
+    def _publisher(self, key: str, encoding: zenoh.Encoding = JSON) -> Any:
         publisher = self._publishers.get(key)
         if publisher is None:
-            publisher = self._publishers[key] = self._session.declare_publisher(key, encoding=JSON)
+            publisher = self._publishers[key] = self._session.declare_publisher(key, encoding=encoding)
         return publisher
 
     def alarm_state(self, gauge: str) -> Mapping[str, Any] | None:
