@@ -290,14 +290,14 @@ def test_replay_twice_gives_identical_readings_and_all_channels(tmp_path):
     assert a["/gauged/readings"] == b["/gauged/readings"]  # message bytes and log times, in order
     assert len(a["/gauged/readings"]) == 120 * 4  # every frame of the demo, every gauge
     assert a["/gauged/failures"] == b["/gauged/failures"] and a["/gauged/alarms"] == b["/gauged/alarms"]
-    assert a["/gauged/cam1/annotations"] == b["/gauged/cam1/annotations"]  # the overlays, one per frame
-    assert len(a["/gauged/cam1/annotations"]) == 120
+    assert a["/cam1/gauged/annotations"] == b["/cam1/gauged/annotations"]  # the overlays, one per frame
+    assert len(a["/cam1/gauged/annotations"]) == 120
 
     for summary in (summary_a, summary_b):  # finished files: a summary naming every channel, even an empty one
         assert summary is not None
         channels = {c.topic: c for c in summary.channels.values()}
         assert set(channels) == {"/gauged/readings", "/gauged/failures", "/gauged/alarms",
-                                 "/gauged/cam1/annotations"}
+                                 "/cam1/gauged/annotations"}
         assert all(c.message_encoding == "json" for c in channels.values())
         assert all(summary.schemas[c.schema_id].encoding == "jsonschema" for c in channels.values())
         assert summary.statistics.channel_message_counts[channels["/gauged/readings"].id] == 480

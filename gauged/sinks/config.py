@@ -34,7 +34,7 @@ class McapSinkConfig(BaseModel):
     images: Literal["none", "annotated"] = Field(
         "none", description="Also log annotated camera images on /gauged/<camera>/annotated.")
     annotations: bool = Field(
-        True, description="Log the readings' overlays (foxglove.ImageAnnotations) on /gauged/<camera>/annotations.")
+        True, description="Log the readings' overlays (foxglove.ImageAnnotations) on /<camera>/gauged/annotations.")
     chunk_kb: int = Field(
         64, ge=4, le=65536, description="Size of a zstd chunk (KiB); a crash loses at most the chunk being filled.")
     flush_s: float = Field(

@@ -3,7 +3,7 @@
 Foxglove and Lichtblick read these without a plugin: plot ``/gauged/readings.value`` (one gauge:
 ``/gauged/readings{gauge=="boiler-pressure"}.value``), list ``/gauged/failures`` and
 ``/gauged/alarms`` in a Raw Messages or Table panel, and show ``/gauged/<camera>/annotated`` in an
-Image panel. ``/gauged/<camera>/annotations`` (``foxglove.ImageAnnotations``, the schema Foxglove
+Image panel. ``/<camera>/gauged/annotations`` (``foxglove.ImageAnnotations``, the schema Foxglove
 publishes, vendored in ``foxglove_schemas/``) overlays the readings on the camera's own image
 topic: open the camera recording with the gauged file and tick the channel in the Image panel.
 """
@@ -24,7 +24,7 @@ def annotated_topic(camera: str) -> str:
 
 
 def annotations_topic(camera: str) -> str:
-    return f"/gauged/{camera}/annotations"
+    return f"/{camera}/gauged/annotations"  # beside the camera's own topics (issue 37)
 
 
 _NUMBER_OR_NULL = {"type": ["number", "null"]}

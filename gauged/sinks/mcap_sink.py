@@ -3,7 +3,7 @@
 Channels (see :mod:`gauged.sinks.mcap_schemas`): ``/gauged/readings``, ``/gauged/failures`` and
 ``/gauged/alarms`` with JSON schemas and JSON messages, registered in every file; and, with
 ``images: annotated``, ``/gauged/<camera>/annotated`` as ``foxglove.CompressedImage`` (JPEG); and,
-with ``annotations: true`` (the default), ``/gauged/<camera>/annotations``, one
+with ``annotations: true`` (the default), ``/<camera>/gauged/annotations``, one
 ``foxglove.ImageAnnotations`` per camera frame holding every gauge's overlay
 (:mod:`gauged.sinks.annotations`), registered at the camera's first frame.
 ``log_time`` and ``publish_time`` are the frame time ``stamp_ns``, so a replay writes the same data.

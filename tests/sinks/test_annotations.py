@@ -221,7 +221,7 @@ def test_replay_of_the_demo_overlays_every_image_at_its_time(tmp_path):
     (path,) = (tmp_path / "out").glob("*.mcap")
     out = read_output(path)
 
-    overlays = out["/gauged/cam1/annotations"]
+    overlays = out["/cam1/gauged/annotations"]
     assert [log_time for log_time, _ in overlays] == stamps  # one per image, logged at the image's time
     boxes = {g.id: g.roi for g in config.gauges}
     readings = {(r["gauge"], t): r for t, r in out["/gauged/readings"]}
@@ -272,7 +272,7 @@ def test_mcap_sink_writes_one_overlay_per_camera_frame_and_can_be_off(tmp_path):
                 [dial_double_output("g1", stamp), dial_double_output("g2", stamp)], stamp, (320, 240)))
         sink.close()
         (path,) = (tmp_path / str(enabled)).glob("*.mcap")
-        overlays = read_output(path).get("/gauged/cam1/annotations", [])
+        overlays = read_output(path).get("/cam1/gauged/annotations", [])
         if not enabled:
             assert overlays == []
             continue
