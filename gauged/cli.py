@@ -15,6 +15,7 @@ COMMAND_MODULES = (
     "gauged.commands.run",
     "gauged.commands.replay",
     "gauged.commands.read",
+    "gauged.commands.commission",
     "gauged.commands.eval",
     "gauged.commands.synth",
     "gauged.commands.check_config",
