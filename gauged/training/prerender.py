@@ -90,8 +90,8 @@ def _render_synth_one(args: tuple[int, int]) -> CropSample:
     is the mask (the counterweight is not, as in the real needle labels)."""
     from gauged.synth.crop import render_crop
 
-    seed, size = args
-    sample = render_crop(seed, size)
+    seed, size, *rest = args
+    sample = render_crop(seed, size, direction=rest[0] if rest else "cw")
     needle = (sample.needle_mask == 1).astype(np.uint8)
     return CropSample(sample.image, synth_points(sample.truth), needle, f"synth/{seed}")
 
@@ -112,10 +112,14 @@ def _in_pool(render, jobs: list[tuple[int, int]], what: str, chunksize: int, wor
 
 
 def synthetic_crop_samples(first_seed: int, count: int, size: int, workers: int = 2,
-                           engine: str = "synth") -> Iterator[CropSample]:
+                           engine: str = "synth", direction: str = "cw") -> Iterator[CropSample]:
     """Rendered crops for seeds ``first_seed .. first_seed + count - 1``, in seed order: ``engine``
-    "synth" is the full :mod:`gauged.synth` engine, "dial" the simple training renderer."""
-    jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
+    "synth" is the full :mod:`gauged.synth` engine, "dial" the simple training renderer; ``direction``
+    is which way the full engine's scales rise ("cw", "ccw", "mixed")."""
+    if engine == "synth" and direction != "cw":
+        jobs = [(seed, size, direction) for seed in range(first_seed, first_seed + count)]
+    else:
+        jobs = [(seed, size) for seed in range(first_seed, first_seed + count)]
     render = _render_synth_one if engine == "synth" else _render_one
     return _in_pool(render, jobs, f"{engine} crops", 16, workers)
 
@@ -176,6 +180,8 @@ def main(argv: list[str] | None = None) -> int:
     crops.add_argument("--out", type=Path, required=True)
     crops.add_argument("--engine", choices=("synth", "dial"), default="synth",
                        help="synth: the full gauged.synth engine (default); dial: the simple training renderer")
+    crops.add_argument("--direction", choices=("cw", "ccw", "mixed"), default="cw",
+                       help="which way the full engine's scales rise (ccw: the models checked on counter-clockwise dials)")
     scenes = sub.add_parser("scenes", help="synthetic camera frames with several dials -> detector shard")
     scenes.add_argument("--seed", type=int, default=0)
     scenes.add_argument("--count", type=int, required=True)
@@ -195,7 +201,8 @@ def main(argv: list[str] | None = None) -> int:
                                    args.size)
         log.info("wrote %d needle photos to %s", written, args.out)
     elif args.what == "crops":
-        samples = synthetic_crop_samples(args.seed, args.count, args.size, engine=args.engine)
+        samples = synthetic_crop_samples(args.seed, args.count, args.size, engine=args.engine,
+                                         direction=args.direction)
         written = write_crop_shard(args.out, samples, args.count, args.size)
         log.info("wrote %d synthetic crops to %s", written, args.out)
     elif args.what == "scenes":
