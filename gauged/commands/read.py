@@ -27,12 +27,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "with two scales (bar and psi) is read on its main (outer) scale; the other scale's reading follows, "
         "in its own unit ('other_scales' in the JSON).",
         epilog="examples:\n  gauged read photo.jpg\n  gauged read --json --debug-dir /tmp/why *.jpg\n"
-        "  gauged read --scale 0 10 bar panel.png      (known scale: no OCR)",
+        "  gauged read --scale 0 10 bar panel.png      (known scale: no OCR)\n"
+        "  gauged read --scale -1 0 bar ccw vac.png    (a vacuum dial rising counter-clockwise)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("images", metavar="IMAGE", nargs="+", help="JPEG/PNG files")
     parser.add_argument("--json", action="store_true", help="one JSON object per line and gauge")
     parser.add_argument("--debug-dir", type=Path, help="write an annotated picture per gauge here")
-    parser.add_argument("--scale", nargs="+", metavar=("MIN MAX", "UNIT"), help="known scale: MIN MAX [UNIT]")
+    parser.add_argument("--scale", nargs="+", metavar=("MIN MAX", "UNIT"),
+                        help="known scale: MIN MAX [UNIT] [cw|ccw] (ccw: values rising counter-clockwise)")
     parser.add_argument("--threads", type=int, default=2, help="onnxruntime threads (default 2)")
     parser.add_argument("--min-confidence", type=float, default=0.5, help="refuse readings below this (default 0.5)")
     parser.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the shipped models "
@@ -43,12 +45,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _known(values: list[str] | None) -> KnownScale | None:
     if not values:
         return None
+    direction = 1
+    if len(values) > 2 and values[-1] in ("cw", "ccw"):
+        direction, values = (1 if values[-1] == "cw" else -1), values[:-1]
     if len(values) not in (2, 3):
-        raise ValueError("--scale takes MIN MAX [UNIT]")
+        raise ValueError("--scale takes MIN MAX [UNIT] [cw|ccw]")
     low, high = float(values[0]), float(values[1])
     if not high > low:
         raise ValueError("--scale MAX must be greater than MIN")
-    return KnownScale(low, high, values[2] if len(values) == 3 else None)
+    return KnownScale(low, high, values[2] if len(values) == 3 else None, direction)
 
 
 def record(image: str, index: int, read: GaugeRead | None, failure: StageFailure | None) -> dict[str, Any]:

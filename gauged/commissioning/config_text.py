@@ -61,15 +61,13 @@ def _scale_block(gauge: GaugeFinding) -> list[str]:
     votes = f"read on {gauge.votes[scale.key]} of {gauge.frames} frame(s)"
     checked = f"the daemon's read of this roi and scale: {gauge.checked} of {gauge.frames}"
     lines: list[str] = []
-    if gauge.configurable:
-        lines.append(f"    scale: {_flow({'min': scale.min, 'max': scale.max, 'unit': scale.unit})}"
-                     f"   # clockwise; {votes}; {checked}")
-        if scale.unit is None:
-            lines.append("    # TODO: no unit read on the dial: add unit: to the scale")
-    else:
-        lines.append(f"    # scale read: {scale.describe()}, {votes}. A configured scale rises clockwise from the start")
-        lines.append("    # notch, so this one is left to the reader (read by OCR and locked at each start); "
-                     f"{checked} with it")
+    fields = {'min': scale.min, 'max': scale.max, 'unit': scale.unit}
+    if scale.direction < 0:
+        fields["direction"] = "ccw"
+    way = "clockwise" if scale.direction > 0 else "counter-clockwise"
+    lines.append(f"    scale: {_flow(fields)}   # {way}; {votes}; {checked}")
+    if scale.unit is None:
+        lines.append("    # TODO: no unit read on the dial: add unit: to the scale")
     if gauge.other_scale is not None:
         other = gauge.other_scale
         if scale.unit and other.unit and other.unit != scale.unit:

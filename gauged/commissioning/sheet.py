@@ -71,14 +71,14 @@ def caption(gauge: GaugeFinding) -> list[tuple[str, tuple[int, int, int]]]:
     lines = [(f"{gauge.id}  roi {list(gauge.roi)}", INK)]
     if gauge.scale is not None:
         scale = gauge.scale
-        lines.append((f"scale {scale.describe()}", GREEN if gauge.configurable else ORANGE))
+        lines.append((f"scale {scale.describe()}", GREEN))
         lines.append((f"read on {gauge.votes[scale.key]} of {gauge.frames} frame(s)", INK))
         if gauge.other_scale is not None:
             lines.append((f"also {gauge.other_scale.describe()}", INK))
     else:
         lines.append(("scale: not read", RED))
     checked = GREEN if gauge.checked == gauge.frames else ORANGE if gauge.todo is None else RED
-    lines.append((f"daemon's read of roi{' and scale' if gauge.configurable else ''}: "
+    lines.append((f"daemon's read of roi and scale: "
                   f"{gauge.checked} of {gauge.frames}", checked))
     if gauge.value is not None and gauge.scale is not None:
         unit = gauge.scale.unit if gauge.scale is not None and gauge.scale.unit else ""
@@ -88,8 +88,6 @@ def caption(gauge: GaugeFinding) -> list[tuple[str, tuple[int, int, int]]]:
         notes.append((f"TODO: {gauge.todo}", RED))
     elif gauge.scale is not None and gauge.scale.unit is None:
         notes.append(("TODO: no unit read: add unit: to the scale", ORANGE))
-    elif not gauge.configurable:
-        notes.append(("left to OCR: a configured scale rises clockwise", ORANGE))
     for note, color in notes:
         lines.extend((line, color) for line in wrap(note, TILE - 8))
     if len(lines) > CAPTION_LINES:

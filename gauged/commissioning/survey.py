@@ -95,11 +95,6 @@ class GaugeFinding:
         return _median_box([s.box for s in self.sightings])
 
     @property
-    def configurable(self) -> bool:
-        """Whether the config can name the scale: a configured scale rises clockwise, from the start notch."""
-        return self.scale is not None and self.scale.direction > 0
-
-    @property
     def value(self) -> float | None:
         read = None if self.shown is None else self.shown.read
         return None if read is None or read.value is None else read.value.value
@@ -198,15 +193,14 @@ def decide(finding: GaugeFinding) -> list[Sighting]:
 
 
 def _check_roi(reader: GaugeReader, finding: GaugeFinding, roi: Roi, frames: list[Frame]) -> tuple[int, str | None]:
-    """How many of ``frames`` the daemon reads in ``roi`` (with the configured scale when the config can
-    name it; else by OCR, counted when it reads the voted scale), and the commonest refusal."""
+    """How many of ``frames`` the daemon reads in ``roi`` (with the voted scale configured, either
+    direction; with none, by OCR), and the commonest refusal."""
     scale = finding.scale
-    known = KnownScale(scale.min, scale.max, scale.unit) if finding.configurable else None
+    known = KnownScale(scale.min, scale.max, scale.unit, scale.direction) if scale is not None else None
     primary = scale.unit if scale is not None and finding.other_scale is not None else None
     reads = [reader.read_box(frame.image, tuple(float(v) for v in roi), 1.0, known, primary, located=False)
              for frame in frames]
-    bad = [r for r in reads if r.value is None
-           or (known is None and scale is not None and ScaleRead.of(r.scale).key != scale.key)]
+    bad = [r for r in reads if r.value is None]
     return len(reads) - len(bad), (_commonest_failure(bad) if bad else None)
 
 

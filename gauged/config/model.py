@@ -45,6 +45,9 @@ class ScaleConfig(BaseModel):
     min: float = Field(..., description="Value at the start of the scale.")
     max: float = Field(..., description="Value at the end of the scale.")
     unit: str | None = Field(None, description="Unit printed on the dial, e.g. bar, psi, degC.")
+    direction: Literal["cw", "ccw"] = Field(
+        "cw", description="Which way the values rise: cw (min at the first notch clockwise) or ccw (min at the "
+        "last: vacuum and some compound gauges, 0..30 inHg or -1..0 bar rising counter-clockwise).")
 
     @model_validator(mode="after")
     def _ordered(self) -> ScaleConfig:

@@ -55,7 +55,8 @@ class GaugeRunner:
         self.reader = reader
         self.tracker = tracker
         self.scale_lock = ScaleLock(lock_config.frames, lock_config.recheck_every_s, lock_config.move_tolerance_px)
-        self.known = (KnownScale(config.scale.min, config.scale.max, config.scale.unit)
+        self.known = (KnownScale(config.scale.min, config.scale.max, config.scale.unit,
+                                 1 if config.scale.direction == "cw" else -1)
                       if config.scale is not None else None)
         self.lock = threading.Lock()  # guards the tracker against Zenoh command threads
         self._last_ns = 0

@@ -58,6 +58,7 @@ class KnownScale:
     min_value: float
     max_value: float
     unit: str | None
+    direction: int = 1  # +1: the values rise clockwise (min at the start notch), -1 counter-clockwise
 
 
 @dataclass

@@ -109,12 +109,12 @@ class EndsLooks:
             low, high = min(agreeing), max(agreeing)
         else:
             low, high = known.min_value, known.max_value
-            if not all(low <= v <= high for v in agreeing):
-                return
+            if not all(low <= v <= high for v in agreeing) or (scales[0].slope > 0) != (known.direction > 0):
+                return  # numbers outside the configured range, or rising the other way
             arc = arc_at_values(arc, scales[0], low, high)  # the ends where the numbers' line puts the configured range
             if arc is None:
                 return
-            scales = [replace(scale_from_prior(arc, low, high, known.unit), markers=scales[0].markers,
+            scales = [replace(scale_from_prior(arc, low, high, known.unit, known.direction), markers=scales[0].markers,
                               inliers=scales[0].inliers, rms_value=scales[0].rms_value)]
         with timer("reading"):
             value = read_value(needle, arc, scales[0], self.min_confidence)

@@ -287,7 +287,7 @@ class GaugeReader(EndsLooks):
                 primary_unit: str | None, result: GaugeRead, timer: _Timer) -> list[ScaleModel] | StageFailure:
         if known is not None:
             result.look = "known"
-            return [scale_from_prior(arc, known.min_value, known.max_value, known.unit)]
+            return [scale_from_prior(arc, known.min_value, known.max_value, known.unit, known.direction)]
         if self.ocr is None:
             return StageFailure("ocr", OCR_UNAVAILABLE, "no OCR engine and no configured scale")
         detail = self._detail(image, crop)

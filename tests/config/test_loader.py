@@ -102,6 +102,14 @@ def test_parse_config_scale_max_must_exceed_min():
     assert _errors(text) == ["cfg.yaml:10 gauges[0].scale.max: must be greater than scale.min (10)"]
 
 
+def test_parse_config_scale_direction_is_cw_or_ccw():
+    text = BASE.replace("camera: cam1", "camera: cam1\n    scale: {min: 0, max: 30, unit: inHg, direction: ccw}")
+    assert parse_config(text).gauges[0].scale.direction == "ccw"
+    assert parse_config(BASE.replace("camera: cam1", "camera: cam1\n    scale: {min: 0, max: 1}")).gauges[0].scale.direction == "cw"
+    (error,) = _errors(BASE.replace("camera: cam1", "camera: cam1\n    scale: {min: 0, max: 1, direction: left}"))
+    assert error.startswith("cfg.yaml:10 gauges[0].scale.direction") and "ccw" in error
+
+
 def test_parse_config_bad_yaml_reports_line():
     (error,) = _errors("site: a\ncameras: [\n  - id: x\n")
     assert error.startswith("cfg.yaml:") and "not valid YAML" in error

@@ -251,6 +251,24 @@ def test_a_ring_refused_for_its_minor_tick_peaks_is_read_on_the_notches_the_chec
     assert roi.failure is None and abs(roi.value.value - gauge["value"]) <= 0.01 * (gauge["max"] - gauge["min"])
 
 
+@pytest.mark.parametrize("index", [2, 6])
+def test_a_configured_counter_clockwise_scale_reads_its_dial(index):
+    """A counter-clockwise render (-100..0 kPa, 0..0.6 bar) read with its scale configured and
+    ``direction: ccw``: the configured max at the start notch. Configured clockwise, the same range is
+    the dial's mirror image, read off by a quarter of the span or more."""
+    from gauged.reader.gauge_read import KnownScale
+    from gauged.synth.dataset import render_item
+
+    image, record, _ = render_item(("crop", 9_000_000, index, 0, 0, 448, False, "ccw"))
+    (gauge,) = record["gauges"]
+    reader, span = _full_reader(), gauge["max"] - gauge["min"]
+    (read,) = reader.read_image(image, KnownScale(gauge["min"], gauge["max"], gauge["unit"], -1))
+    assert read.failure is None and read.scale.slope < 0, read.failure
+    assert abs(read.value.value - gauge["value"]) <= 0.01 * span
+    (mirrored,) = reader.read_image(image, KnownScale(gauge["min"], gauge["max"], gauge["unit"]))
+    assert abs(mirrored.value.value - gauge["value"]) > 0.2 * span
+
+
 def test_a_configured_scale_reads_a_dial_whose_end_notches_are_not_found():
     """The demo's feed-tank-temp (-30..50 degC over about 330 degrees, its gap narrower than a notch
     step): the crop model misses its end notches and no gap stands out, so the ellipse stage finds no

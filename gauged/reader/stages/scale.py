@@ -57,12 +57,16 @@ MISSED_MINUS = 0.5  # what a line pays for each agreeing number it makes negativ
 RETRY_ZERO_MARGIN = 0.05  # of the span: a fitted end this far past zero is on the other side of it
 
 
-def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: str | None) -> ScaleModel:
-    """Linear scale from ``min_value`` at the start notch to ``max_value`` at the end notch."""
+def scale_from_prior(arc: ScaleArc, min_value: float, max_value: float, unit: str | None,
+                     direction: int = 1) -> ScaleModel:
+    """Linear scale from ``min_value`` at the start notch (the first clockwise) to ``max_value`` at the
+    end notch; with ``direction`` -1 (values rising counter-clockwise) from ``max_value`` at the start
+    to ``min_value`` at the end."""
     start = unwrap(arc.start_angle, arc.zero_angle)
     end = unwrap(arc.end_angle, arc.zero_angle)
-    slope = (max_value - min_value) / (end - start)
-    return ScaleModel(arc.ellipse, slope, min_value - slope * start, arc.zero_angle, min_value, max_value, unit)
+    at_start = min_value if direction > 0 else max_value
+    slope = (max_value - min_value) / (end - start) * (1 if direction > 0 else -1)
+    return ScaleModel(arc.ellipse, slope, at_start - slope * start, arc.zero_angle, min_value, max_value, unit)
 
 
 def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[PrintedUnit] = (),

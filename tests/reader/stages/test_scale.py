@@ -13,7 +13,7 @@ import pytest
 from gauged.geometry.dial_frame import point_at_dial_angle
 from gauged.reader.ocr.units import PrintedUnit
 from gauged.reader.stages.ellipse import fit_scale_arc
-from gauged.reader.stages.scale import fit_scales, with_round_ends
+from gauged.reader.stages.scale import fit_scales, scale_from_prior, with_round_ends
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 from tests.reader.dial_maps import CROP, Dial, keypoints_for
 
@@ -360,6 +360,16 @@ def test_a_vacuum_dial_with_some_minus_signs_read_is_read_negative():
     one = [replace(m, text="15") if m.text == "-15" else m for m in ring]  # "0, 5, 15, -20, 30"
     (scale,) = fit_scales(arc, one)
     assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 30.0), abs=1e-6)
+
+
+def test_a_prior_rising_counter_clockwise_puts_its_max_at_the_start_notch():
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    start, end = (float(arc.linear(a)) for a in (arc.start_angle, arc.end_angle))
+    clockwise = scale_from_prior(arc, -1.0, 0.0, "bar")
+    counter = scale_from_prior(arc, -1.0, 0.0, "bar", direction=-1)
+    assert (clockwise.value_at(start), clockwise.value_at(end)) == pytest.approx((-1.0, 0.0))
+    assert (counter.value_at(start), counter.value_at(end)) == pytest.approx((0.0, -1.0))
+    assert (counter.min_value, counter.max_value, counter.slope < 0) == (-1.0, 0.0, True)
 
 
 def test_negative_values_given_to_unsigned_texts_are_read_as_printed():
