@@ -3,6 +3,10 @@
     box (ROI or detection) -> reader (full read, or needle only once the scale is locked)
         -> RawReading -> GaugeTracker (smoothing, quality, alarms) -> Reading + alarm events
 
+A locked gauge's needle is found by a radial scan (gauged.reader.stages.needle_scan) whose look is
+learnt from the last locked frame the crop model read; the crop model reads every
+:data:`CROP_MODEL_EVERY`-th locked frame, and every frame the scan cannot tell.
+
 Owned by its camera's worker thread; the Zenoh command path reaches the tracker through ``lock``.
 """
 
@@ -19,11 +23,13 @@ from gauged.alarms.lifecycle import AlarmEvent
 from gauged.config.model import GaugeConfig, ScaleLockConfig
 from gauged.reader.gauge_read import GaugeRead, KnownScale
 from gauged.reader.stages.ellipse import ScaleArc
-from gauged.tracking.scale_lock import ScaleLock
+from gauged.reader.stages.needle_scan import NeedleLook, ScannedNeedle, follow_needle, learn_needle_look
+from gauged.tracking.scale_lock import LockedScale, ScaleLock
 from gauged.tracking.tracker import GaugeTracker
 from gauged.types import Box, Frame, RawReading, Reading, ScaleModel, StageFailure
 
 log = logging.getLogger(__name__)
+CROP_MODEL_EVERY = 10  # locked frames: one in ten is read by the crop model, which checks and re-learns the scan
 
 
 class Reader(Protocol):
@@ -32,7 +38,8 @@ class Reader(Protocol):
     def read_box(self, image: np.ndarray, box: Box, score: float = 1.0, known: KnownScale | None = None,
                  primary_unit: str | None = None, located: bool = False) -> GaugeRead: ...
 
-    def read_locked(self, image: np.ndarray, box: Box, arc: ScaleArc, scale: ScaleModel) -> GaugeRead: ...
+    def read_locked(self, image: np.ndarray, box: Box, arc: ScaleArc, scale: ScaleModel,
+                    look: NeedleLook | None = None) -> GaugeRead: ...
 
 
 @dataclass
@@ -60,6 +67,9 @@ class GaugeRunner:
                       if config.scale is not None else None)
         self.lock = threading.Lock()  # guards the tracker against Zenoh command threads
         self._last_ns = 0
+        self._look: NeedleLook | None = None  # the needle's look, learnt on the lock whose arc is _look_arc
+        self._look_arc: ScaleArc | None = None
+        self._scans = 0  # locked frames scanned since the crop model last read one
 
     @property
     def gauge(self) -> str:
@@ -78,7 +88,7 @@ class GaugeRunner:
         locked = self.scale_lock.locked
         read: GaugeRead | None = None
         if locked is not None and not self.scale_lock.recheck_due(frame.stamp_ns):
-            read = self.reader.read_locked(frame.image, locked.box, locked.arc, locked.scale)
+            read = self._read_locked(frame, locked)
             lock_changed = self._check_moved(read, locked.arc)
         elif box is None:
             failure = StageFailure("detect", "gauge_not_found", f"no detection associated with gauge {self.gauge}")
@@ -96,6 +106,23 @@ class GaugeRunner:
                     log.warning("gauge %s: scale re-check disagreed, lock released", self.gauge)
                     lock_changed = True
         return self._track(frame, read, read.failure, lock_changed)
+
+    def _read_locked(self, frame: Frame, locked: LockedScale) -> GaugeRead:
+        """The needle-only read of a locked frame: scanned while the scan's look is fresh, else (and
+        whenever the scan cannot tell) by the crop model, whose read the look is then learnt from."""
+        look = self._look if self._look_arc is locked.arc else None
+        scan = look if look is not None and self._scans < CROP_MODEL_EVERY - 1 else None
+        read = self.reader.read_locked(frame.image, locked.box, locked.arc, locked.scale, look=scan)
+        if read.keypoints is None:  # scanned (or not even cropped)
+            if isinstance(read.needle, ScannedNeedle):
+                self._scans += 1
+                self._look = follow_needle(look, read.needle)
+            return read
+        self._scans = 0
+        if read.needle is not None:
+            learnt = learn_needle_look(read.crop.image, locked.arc, read.needle, look)
+            self._look, self._look_arc = (None, None) if isinstance(learnt, StageFailure) else (learnt, locked.arc)
+        return read
 
     def _check_moved(self, read: GaugeRead, arc: ScaleArc) -> bool:
         if read.crop is None or read.keypoints is None or isinstance(read.keypoints, StageFailure):

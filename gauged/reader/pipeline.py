@@ -40,7 +40,8 @@ from gauged.reader.stages.keypoints import (
     decode_crop_maps,
     sure_numbers,
 )
-from gauged.reader.stages.needle import fit_needle
+from gauged.reader.stages.needle import NeedleReading, fit_needle
+from gauged.reader.stages.needle_scan import NeedleLook, scan_needle
 from gauged.reader.stages.notch_check import NotchCheck
 from gauged.reader.stages.ocr import NO_NUMBERS
 from gauged.reader.stages.reading import read_value
@@ -177,15 +178,29 @@ class GaugeReader(EndsLooks):
         result.value = value
         return result
 
-    def read_locked(self, image: np.ndarray, box: Box, arc: ScaleArc, scale: ScaleModel) -> GaugeRead:
+    def read_locked(self, image: np.ndarray, box: Box, arc: ScaleArc, scale: ScaleModel,
+                    look: NeedleLook | None = None) -> GaugeRead:
         """Read only the needle against a locked scale arc and map (crop pixels of a crop of ``box``).
 
         The cheap steady-state path of a fixed camera: crop, crop model, needle, value — no ellipse
         fit, no OCR. ``keypoints.pivot`` is kept so the caller can check the dial has not moved.
+        With the needle's ``look`` (:func:`gauged.reader.stages.needle_scan.learn_needle_look`), the
+        needle is first found by a radial scan instead, without the crop model; a read so made has no
+        ``keypoints``. A frame the scan cannot tell is read with the crop model as before.
         """
         result = GaugeRead(box=box, score=1.0, arc=arc, scales=[scale], look="locked")
         timer = _Timer(result.seconds)
-        if not self._crop_and_keypoints(image, box, result, timer, require_notches=False):
+        crop = None
+        if look is not None:
+            with timer("crop"):
+                crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
+            if not isinstance(crop, StageFailure):
+                with timer("needle_scan"):
+                    scanned = scan_needle(crop.image, arc, look)
+                if not isinstance(scanned, StageFailure):
+                    result.crop = crop
+                    return self._locked_value(result, scanned, arc, scale, timer)
+        if not self._crop_and_keypoints(image, box, result, timer, require_notches=False, crop=crop):
             return result
         keypoints = result.keypoints
         with timer("needle"):
@@ -193,6 +208,10 @@ class GaugeReader(EndsLooks):
         if isinstance(needle, StageFailure):
             result.failure = needle
             return result
+        return self._locked_value(result, needle, arc, scale, timer)
+
+    def _locked_value(self, result: GaugeRead, needle: NeedleReading, arc: ScaleArc, scale: ScaleModel,
+                      timer: _Timer) -> GaugeRead:
         result.needle = needle
         with timer("reading"):
             value = read_value(needle, arc, scale, self.min_confidence)
@@ -263,10 +282,13 @@ class GaugeReader(EndsLooks):
         return None if isinstance(detail, StageFailure) else detail.image
 
     def _crop_and_keypoints(self, image: np.ndarray, box: Box, result: GaugeRead, timer: _Timer,
-                            require_notches: bool, check_notches: bool = False) -> bool:
-        """Crop and run the crop model into ``result``; False (with ``result.failure`` set) on failure."""
-        with timer("crop"):
-            crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
+                            require_notches: bool, check_notches: bool = False,
+                            crop: Crop | StageFailure | None = None) -> bool:
+        """Crop (unless ``crop`` is that of ``box`` already) and run the crop model into ``result``; False
+        (with ``result.failure`` set) on failure."""
+        if crop is None:
+            with timer("crop"):
+                crop = crop_gauge(image, box, self.crop_size, self.crop_pad)
         if isinstance(crop, StageFailure):
             result.failure = crop
             return False
