@@ -285,13 +285,18 @@ def overruled_signs(model: ScaleModel) -> int:
     that the fit left out but whose magnitude lies on its line (within a quarter step: "-1.0" where
     the line puts 1.0)."""
     agreeing = [m for m in model.markers if m.inlier]
-    edits = sum(_read_negative(m.text) and m.value > 0 for m in agreeing)
-    values = np.unique([m.value for m in agreeing])
+    return sum(_read_negative(m.text) and m.value > 0 for m in agreeing) + len(_overruled_left_out(model))
+
+
+def _overruled_left_out(model: ScaleModel) -> list[float]:
+    """The magnitudes of the numbers read negative that ``model`` leaves out but puts, unsigned, where
+    they are read (within a quarter step: "-1.0" where the line puts 1.0)."""
+    values = np.unique([m.value for m in model.markers if m.inlier])
     step = round_step(values) if len(values) > 1 else 0.0
-    for m in model.markers:
-        if not m.inlier and m.angle is not None and m.value < 0 and step > 0:
-            edits += abs(model.value_at(m.angle) + m.value) <= 0.25 * step
-    return edits
+    if step <= 0:
+        return []
+    return [-m.value for m in model.markers if not m.inlier and m.angle is not None and m.value < 0
+            and abs(model.value_at(m.angle) + m.value) <= 0.25 * step]
 
 
 def added_signs(model: ScaleModel) -> int:
@@ -320,8 +325,15 @@ def _all_negative(ring: list[ScaleMarker]) -> list[ScaleMarker]:
 
 
 def _evidence(model: ScaleModel) -> float:
-    """Distinct agreeing numbers less the signs the line edits (:data:`MISSED_MINUS` for one it adds)."""
-    return len(set(agreeing_digit_values(model))) - overruled_signs(model) - MISSED_MINUS * added_signs(model)
+    """Distinct numbers the line explains less the signs it edits (:data:`MISSED_MINUS` for one it adds).
+
+    A number read negative that the line leaves out but whose magnitude it puts there ("-100" where it
+    puts 100) is explained with its sign overruled, as an agreeing "-0.2" taken as 0.2 is: counted, and
+    charged as an edit. Left uncounted, one tick read as a minus on a 0..250 dial rising
+    counter-clockwise made the line through its numbers, as read, lose to a clockwise -250..0 line
+    that adds four unread minus signs (the likeliest number grid proposes both)."""
+    values = set(agreeing_digit_values(model)) | set(_overruled_left_out(model))
+    return len(values) - overruled_signs(model) - MISSED_MINUS * added_signs(model)
 
 
 def _checked_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int) -> ScaleModel | StageFailure:

@@ -383,3 +383,15 @@ def test_negative_values_given_to_unsigned_texts_are_read_as_printed():
     ring = _counter_clockwise_vacuum([(t, -v) for t, v in zip(texts, printed)])
     (scale,) = fit_scales(arc, ring)
     assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 1.6), abs=1e-6)
+
+
+def test_a_tick_read_as_a_minus_does_not_turn_a_counter_clockwise_dial_negative():
+    """A 0..250 dial rising counter-clockwise with one tick read as a minus ("-100"), valued by a number
+    grid that took it for a -250..0 scale rising clockwise whose minus signs went unread. The line
+    through the numbers as read explains all six, "-100" with its sign overruled (1); the clockwise
+    one adds four unread signs (0.5 each): the dial is read as printed."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    printed = [250.0, 200.0, 150.0, 100.0, 50.0, 0.0]
+    texts = [("-" if v == 100 else "") + f"{v:g}" for v in printed]
+    (scale,) = fit_scales(arc, _counter_clockwise_vacuum([(t, -v) for t, v in zip(texts, printed)]))
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 250.0), abs=1e-6)
