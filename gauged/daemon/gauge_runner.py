@@ -119,7 +119,7 @@ class GaugeRunner:
                 self._look = follow_needle(look, read.needle)
             return read
         self._scans = 0
-        if read.needle is not None:
+        if read.needle is not None and CROP_MODEL_EVERY > 1:  # (1: the crop model reads every frame, no scan)
             learnt = learn_needle_look(read.crop.image, locked.arc, read.needle, look)
             self._look, self._look_arc = (None, None) if isinstance(learnt, StageFailure) else (learnt, locked.arc)
         return read
