@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -53,21 +54,27 @@ def test_the_calibration_is_the_logistic_of_its_standardised_terms(tmp_path):
     assert Calibration.load(tmp_path / "missing.json") is None
 
 
-def test_the_reader_gives_the_calibrated_confidence_and_keeps_the_trust():
+def test_the_calibration_gives_a_scale_read_by_ocr_its_probability_and_keeps_the_trust():
     dial = Dial()
     plain = _known_read(GaugeReader(DialCropModel(dial), ocr=None))
     calibration = Calibration(("needle_mask",), np.array([0.0]), np.array([1.0]), np.array([0.0]), -1.0)
-    reader = GaugeReader(DialCropModel(dial), ocr=None, calibration=calibration)
-    read = _known_read(reader)
-
-    assert math.isclose(read.value.confidence, 1 / (1 + math.e))  # sigmoid(-1): the bias alone
-    assert read.value.trust == plain.value.trust and read.value.value == plain.value.value
-    locked = reader.read_locked(IMAGE, BOX, read.arc, read.scale)
-    assert locked.look == "locked" and math.isclose(locked.value.confidence, 1 / (1 + math.e))
+    as_read_by_ocr = calibration.apply(replace(plain, look="first", value=plain.value))
+    assert math.isclose(as_read_by_ocr.value.confidence, 1 / (1 + math.e))  # sigmoid(-1): the bias alone
+    assert as_read_by_ocr.value.trust == plain.value.trust and as_read_by_ocr.value.value == plain.value.value
 
 
-def test_the_shipped_calibration_loads_when_present():
+def test_configured_and_locked_scales_keep_the_trust_as_confidence():
+    """The calibration is fitted on scales read by OCR; the tracker weighs readings by confidence,
+    so a configured or locked scale's reading keeps the trust it always had."""
+    calibration = Calibration(("needle_mask",), np.array([0.0]), np.array([1.0]), np.array([0.0]), -1.0)
+    reader = GaugeReader(DialCropModel(Dial()), ocr=None, calibration=calibration)
+    known = _known_read(reader)
+    assert known.look == "known" and known.value.confidence == known.value.trust
+    locked = reader.read_locked(IMAGE, BOX, known.arc, known.scale)
+    assert locked.look == "locked" and locked.value.confidence == locked.value.trust
+
+
+def test_the_shipped_calibration_loads_and_knows_its_terms():
     calibration = Calibration.load()
-    if calibration is None:
-        return  # not fitted yet: the reader's confidence is its trust (tested above)
+    assert calibration is not None, "gauged/models/confidence.json is shipped"
     assert set(calibration.terms) <= set(evidence(_known_read(GaugeReader(DialCropModel(Dial()), ocr=None))))
