@@ -10,6 +10,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gauged.commands.argtypes import non_negative, positive_int
+
 if TYPE_CHECKING:
     from gauged.commissioning.survey import GaugeFinding
 
@@ -50,18 +52,6 @@ exit codes: 0 config written (TODOs included), 1 no gauge found, no frame arrive
 DEFAULT_SHEET = Path("gauged-commission.png")  # when the config goes to stdout
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
-    return value
-
-
-def _non_negative(text: str) -> float:
-    value = float(text)
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
-    return value
 
 
 def _config_id(text: str) -> str:
@@ -80,10 +70,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite --out when it exists")
     parser.add_argument("--sheet", metavar="PNG", type=Path,
                         help=f"contact sheet to write (default: CFG-sheet.png beside --out, else {DEFAULT_SHEET})")
-    parser.add_argument("-n", "--frames", type=_positive_int, default=6, metavar="N",
+    parser.add_argument("-n", "--frames", type=positive_int, default=6, metavar="N",
                         help="frames read per camera of a recording or live key (default 6); more frames make "
                         "the scale vote surer and take about 2-5 s each")
-    parser.add_argument("--every", type=_non_negative, default=5.0, metavar="SECONDS",
+    parser.add_argument("--every", type=non_negative, default=5.0, metavar="SECONDS",
                         help="at least this much frame time between the frames read (default 5), so the "
                         "needle is seen in several places")
     parser.add_argument("--topic", action="append", metavar="TOPIC",
@@ -94,7 +84,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                         help="Zenoh endpoint to connect to, e.g. tcp/10.0.0.5:7447 (repeatable); written to the config")
     parser.add_argument("--mode", choices=("peer", "client"), default="peer", help="Zenoh session mode (default peer)")
-    parser.add_argument("--timeout", type=_non_negative, metavar="SECONDS",
+    parser.add_argument("--timeout", type=non_negative, metavar="SECONDS",
                         help="how long to wait for a live key's frames (default: frames x every + 10 s)")
     parser.add_argument("--threads", type=int, default=2, help="onnxruntime threads (default 2)")
     parser.add_argument("--models", type=Path, help="folder with crop.onnx/detector.onnx to use instead of the "

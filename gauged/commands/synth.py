@@ -18,21 +18,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from gauged.commands.argtypes import positive_float, positive_int
+
 log = logging.getLogger(__name__)
-
-
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
 
 
 def _quality(text: str) -> int:
@@ -61,32 +49,32 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     images = sub.add_parser("images", help="write rendered images and labels.jsonl",
                             description="Write N renders as DIR/NNNNNN.jpg and their ground truth as DIR/labels.jsonl.")
-    images.add_argument("--count", type=_positive_int, required=True, help="number of images")
+    images.add_argument("--count", type=positive_int, required=True, help="number of images")
     images.add_argument("--seed", type=int, default=0, help="seed of the batch (image i uses seed [S, i])")
     images.add_argument("--out", type=Path, required=True, help="output directory")
     images.add_argument("--kind", choices=("scene", "crop"), default="scene",
                         help="scene: full frames with several gauges; crop: square crops of one gauge")
-    images.add_argument("--width", type=_positive_int, default=1280, help="scene width in px")
-    images.add_argument("--height", type=_positive_int, default=720, help="scene height in px")
-    images.add_argument("--size", type=_positive_int, default=448, help="crop side in px")
+    images.add_argument("--width", type=positive_int, default=1280, help="scene width in px")
+    images.add_argument("--height", type=positive_int, default=720, help="scene height in px")
+    images.add_argument("--size", type=positive_int, default=448, help="crop side in px")
     images.add_argument("--masks", action="store_true", help="also write needle label maps DIR/masks/NNNNNN.png (crops)")
     images.add_argument("--clean", action="store_true", help="no glass, shadows, blur, noise or compression")
     images.add_argument("--quality", type=_quality, default=95, help="JPEG quality of the written files")
-    images.add_argument("--workers", type=_positive_int, default=1, help="worker processes")
+    images.add_argument("--workers", type=positive_int, default=1, help="worker processes")
     _direction(images)
 
     rec = sub.add_parser("recording", help="write a moving scene as an MCAP recording",
                          description="Render one camera looking at K gauges whose values move, as MCAP "
                                      "(foxglove.CompressedImage JSON, or ROS 2 CDR with --ros2), with the truth on /<camera>/truth.")
-    rec.add_argument("--seconds", type=_positive_float, default=60.0, help="duration in seconds")
-    rec.add_argument("--fps", type=_positive_float, default=2.0, help="frames per second")
-    rec.add_argument("--gauges", type=_positive_int, default=3, help="number of gauges in view")
+    rec.add_argument("--seconds", type=positive_float, default=60.0, help="duration in seconds")
+    rec.add_argument("--fps", type=positive_float, default=2.0, help="frames per second")
+    rec.add_argument("--gauges", type=positive_int, default=3, help="number of gauges in view")
     rec.add_argument("--seed", type=int, default=0, help="seed of the scene and its timelines")
     rec.add_argument("--out", type=Path, required=True, help="output .mcap file")
     rec.add_argument("--ros2", action="store_true", help="write sensor_msgs/msg/CompressedImage (ros2msg + cdr)")
     rec.add_argument("--camera", default="cam1", help="camera id (topics /<camera>/image and /<camera>/truth)")
-    rec.add_argument("--width", type=_positive_int, default=960, help="frame width in px")
-    rec.add_argument("--height", type=_positive_int, default=540, help="frame height in px")
+    rec.add_argument("--width", type=positive_int, default=960, help="frame width in px")
+    rec.add_argument("--height", type=positive_int, default=540, help="frame height in px")
     rec.add_argument("--quality", type=_quality, default=80, help="JPEG quality of the frames")
     _direction(rec)
 
@@ -94,9 +82,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                            description="Write a PNG grid of random renders (crops, every sixth a full scene).")
     sheet.add_argument("--out", type=Path, required=True, help="output image (.png)")
     sheet.add_argument("--seed", type=int, default=0, help="seed")
-    sheet.add_argument("--count", type=_positive_int, default=48, help="number of tiles")
-    sheet.add_argument("--tile", type=_positive_int, default=256, help="tile side in px")
-    sheet.add_argument("--workers", type=_positive_int, default=1, help="worker processes")
+    sheet.add_argument("--count", type=positive_int, default=48, help="number of tiles")
+    sheet.add_argument("--tile", type=positive_int, default=256, help="tile side in px")
+    sheet.add_argument("--workers", type=positive_int, default=1, help="worker processes")
     _direction(sheet)
 
     demo = sub.add_parser("demo", help="rebuild the bundled demo recording (four moving dials, one camera)",

@@ -284,8 +284,12 @@ def overruled_signs(model: ScaleModel) -> int:
     it gives a positive value (a minus taken for a tick, "-0.2" as 0.2), and a number read negative
     that the fit left out but whose magnitude lies on its line (within a quarter step: "-1.0" where
     the line puts 1.0)."""
-    agreeing = [m for m in model.markers if m.inlier]
-    return sum(_read_negative(m.text) and m.value > 0 for m in agreeing) + len(_overruled_left_out(model))
+    return _overruled_agreeing(model) + len(_overruled_left_out(model))
+
+
+def _overruled_agreeing(model: ScaleModel) -> int:
+    """How many agreeing numbers of ``model`` were read with a minus it gives a positive value."""
+    return sum(_read_negative(m.text) and m.value > 0 for m in model.markers if m.inlier)
 
 
 def _overruled_left_out(model: ScaleModel) -> list[float]:
@@ -332,8 +336,9 @@ def _evidence(model: ScaleModel) -> float:
     charged as an edit. Left uncounted, one tick read as a minus on a 0..250 dial rising
     counter-clockwise made the line through its numbers, as read, lose to a clockwise -250..0 line
     that adds four unread minus signs (the likeliest number grid proposes both)."""
-    values = set(agreeing_digit_values(model)) | set(_overruled_left_out(model))
-    return len(values) - overruled_signs(model) - MISSED_MINUS * added_signs(model)
+    left_out = _overruled_left_out(model)
+    overruled = _overruled_agreeing(model) + len(left_out)
+    return len(set(agreeing_digit_values(model)) | set(left_out)) - overruled - MISSED_MINUS * added_signs(model)
 
 
 def _checked_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int) -> ScaleModel | StageFailure:
