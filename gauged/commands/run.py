@@ -12,6 +12,7 @@ from pathlib import Path
 
 from gauged import __version__
 from gauged.daemon.app import Daemon
+from gauged.daemon.malloc_arenas import limit_malloc_arenas
 from gauged.config import ConfigError, load_config, load_default_config
 from gauged.config.model import GaugedConfig
 from gauged.config.summary import summarize
@@ -73,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     if problem:
         print(problem, file=sys.stderr)
         return 2
+    limit_malloc_arenas()  # before the daemon starts its threads
     notifier = SystemdNotifier()
     if args.log_format == "json":  # keep journald lines machine-readable
         log.info("gauged %s starting: %s", __version__, summarize(config).replace("\n", "; "))

@@ -26,6 +26,11 @@ def session_options(threads: int) -> ort.SessionOptions:
     (detector, crop model, OCR detector and recogniser), and the threads one session left spinning
     took the cores from the next. The cold read took 256 ms median with spinning, 191 ms without
     (``bench/bench_read.py``, 2 cores).
+
+    Neither the memory arena nor memory patterns are kept: the OCR models take a new input shape
+    at nearly every line and dial, and each shape grew the arena and cached a pattern for good. With
+    them, four camera threads of cold reads held 935 MB; without, 554 MB, at the same cold-read
+    speed (276-280 against 273-285 ms median, run alternately; ``bench/bench_load.py`` for the daemon).
     """
     options = ort.SessionOptions()
     options.intra_op_num_threads = threads
@@ -34,6 +39,8 @@ def session_options(threads: int) -> ort.SessionOptions:
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
     options.add_session_config_entry("session.intra_op.allow_spinning", "0")
     options.log_severity_level = 3
+    options.enable_cpu_mem_arena = False
+    options.enable_mem_pattern = False
     return options
 
 

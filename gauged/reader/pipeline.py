@@ -9,6 +9,8 @@ picture or a scale lock can use them. A known scale (configured prior or a locke
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from gauged.reader.evidence import Calibration
@@ -71,6 +73,10 @@ class GaugeReader(EndsLooks):
         self.ocr = ocr
         self.min_confidence = min_confidence
         self.crop_pad = crop_pad
+        # Full reads run one at a time (locked reads do not wait): each already uses every core it
+        # is given, and four cameras' cold reads at once held the OCR's working memory four times
+        # (the daemon's peak RSS under bench/bench_load.py: see docs/performance.md).
+        self._full_reads = threading.Lock()
 
     @property
     def crop_size(self) -> int:
@@ -101,7 +107,13 @@ class GaugeReader(EndsLooks):
         kept, else the read that got furthest. A ring refused for its notch fit gets the notch check's
         last look (:meth:`_ring_of_checked_notches`). A dial found and then refused (needle, OCR,
         scale) is not read again: every try is another chance for a wrong scale to pass a check.
+        Full reads of several threads run one at a time.
         """
+        with self._full_reads:
+            return self._read_box(image, box, score, known, primary_unit, located)
+
+    def _read_box(self, image: np.ndarray, box: Box, score: float, known: KnownScale | None,
+                  primary_unit: str | None, located: bool) -> GaugeRead:
         read = self._read_once(image, box, score, known, primary_unit)
         # (an image read whole that shows no notch at all is no dial, not a dial cut by the image's edges)
         stages = ("ellipse",) if tuple(box) == whole_image(image) else ("crop", "keypoints", "ellipse")
