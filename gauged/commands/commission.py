@@ -52,8 +52,6 @@ exit codes: 0 config written (TODOs included), 1 no gauge found, no frame arrive
 DEFAULT_SHEET = Path("gauged-commission.png")  # when the config goes to stdout
 
 
-
-
 def _config_id(text: str) -> str:
     if not re.fullmatch(r"[A-Za-z0-9_.-]+", text):
         raise argparse.ArgumentTypeError(f"letters, digits, '_', '.' and '-' only (a config id), got {text!r}")

@@ -2,8 +2,8 @@
 
 glibc gives each thread that allocates concurrently an arena of its own (up to 8 per core), and
 memory freed in one arena is not reused by another: under the load test (``bench/bench_load.py``,
-4 cameras x 4 gauges) the daemon held 477 MB with the default and 417 MB with two arenas, at the
-same latency. ``MALLOC_ARENA_MAX`` in the environment, when set, wins.
+4 cameras x 4 gauges) the daemon's peak RSS was 502 MB with the default and 446 MB with two
+arenas, at the same latency. ``MALLOC_ARENA_MAX`` in the environment, when set, wins.
 """
 
 from __future__ import annotations
