@@ -49,6 +49,8 @@ CLOSER_MIN_MATCH = 0.9  # the closer look takes spelled units only: its lone let
 QUICK_ENOUGH = 4  # numbers of one progression read at the hints alone that end the quick pass
 POLAR_DETECT_SCALE = 0.75  # of the strip's size for its text detection: the same 130 of 300 dev renders and 7 of 21
 # real photos refused as at full size, for about half its cost (57 -> ~30 ms on an 875 px strip)
+TURNED_GLYPHS = 0.25  # share of the hints' readings that are glyphs of turned numbers above which the dial is
+# taken to print its numbers turned and read by the full pass (a lone glyph, left out, sent 4 of 5 renders there)
 OUTER_SCALE = 1.12  # scale radii: two numbers beyond this that the hints missed send the quick pass on
 
 
@@ -161,16 +163,18 @@ class DialTextReader:
                 out += [b for b in self._recognise(image, [quad], circle) if parse_number(b.text)]
         return out
 
-    def read_at_hints(self, image_bgr: np.ndarray, hints: np.ndarray, circle: Circle) -> tuple[list[TextBox], bool]:
+    def read_at_hints(self, image_bgr: np.ndarray, hints: np.ndarray, circle: Circle) -> tuple[list[TextBox], int]:
         """The quick pass: the ink blob at each hint (predicted number centre, px) recognised, all in
-        one batch, no text detection. Returns the readings that parse as numbers, and whether one of
-        them is a single glyph of a turned number (read alone, the "4" of a "40" is a number too)."""
+        one batch, no text detection. Returns the readings that parse as numbers, less the single
+        glyphs of turned numbers (read alone, the "4" of a "40" is a number too), and how many such
+        glyphs were left out."""
         in_ring = [(hx, hy) for hx, hy in np.asarray(hints, float).reshape(-1, 2) if _in_ring((hx, hy), circle)]
         inks = _inks(image_bgr, in_ring, circle[2])
-        boxes = [b for b in self._recognise(image_bgr, [quad for quad, _ in inks], circle) if parse_number(b.text)]
-        numbers = _split_spaced(_dedupe(boxes))
         parts = [quad for quad, turned_part in inks if turned_part]
-        return numbers, any(np.array_equal(t.quad, quad) for t in numbers for quad in parts)
+        boxes = [b for b in self._recognise(image_bgr, [quad for quad, _ in inks], circle) if parse_number(b.text)]
+        glyph = [any(np.array_equal(b.quad, quad) for quad in parts) for b in boxes]
+        numbers = _split_spaced(_dedupe([b for b, g in zip(boxes, glyph, strict=True) if not g]))
+        return numbers, sum(glyph)
 
     def read_face_texts(self, image_bgr: np.ndarray, circle: Circle, known: Sequence[TextBox]) -> list[TextBox]:
         """After a quick pass: the texts on the whole ring square (one detection) that the quick
@@ -208,15 +212,17 @@ class DialTextReader:
 
         Its numbers must form a progression near the ring, and no other numbers may be printed
         outside the ring: those would be a main scale the crop model did not hint (a degF ring
-        around the degC one it did), which only the full pass reads. Nor may one of them be a glyph
-        of a turned number read alone (:meth:`read_at_hints`).
+        around the degC one it did), which only the full pass reads. Glyphs of turned numbers read
+        alone (:meth:`read_at_hints`) are left out, and more than :data:`TURNED_GLYPHS` of them
+        send the dial to the full pass.
         """
         if not self.quick or hints is None or len(hints) < QUICK_ENOUGH:
             return None, []
-        numbers, turned_part = self.read_at_hints(image_bgr, hints, circle)
-        if turned_part:
-            # Glyphs of a turned "30, 40, 50" read "3, 4, 5" agree on a line ten times too flat (a synthetic
-            # render, 86% off); the full pass reads the detector's turned boxes whole.
+        numbers, glyphs = self.read_at_hints(image_bgr, hints, circle)
+        if glyphs > TURNED_GLYPHS * (len(numbers) + glyphs):
+            # A dial printing its numbers turned: glyphs of a turned "30, 40, 50" read "3, 4, 5" agree on
+            # a line ten times too flat (a synthetic render, 86% off); the full pass reads the detector's
+            # turned boxes whole.
             return None, numbers
         # Numbers deep inside the ring belong to an inner, secondary scale: the main scale's numbers
         # were not hinted, so only the full pass can find them.

@@ -537,3 +537,23 @@ def test_int8_detector_finds_the_texts_the_float_detector_finds():
     # Every text the float detector finds clearly, the int8 one finds at the same place. It may add
     # a box (a tick stroke) that the recogniser then reads as no text.
     assert checked >= 25 and misplaced == []
+
+
+def test_quick_pass_leaves_out_a_lone_turned_glyph_and_gives_way_to_many(reader):
+    """One number printed turned among upright ones (its first glyph, read alone, is a number of its
+    own) is left out of the quick pass, which still reads the dial: its face detection finds the
+    turned "20" whole. A dial printing all its numbers turned goes on to the full pass."""
+    values = list(range(0, 101, 10))
+    upright, centres = render_dial(values)
+    radial, _ = render_dial(values, radial=True)
+    mixed = upright.copy()
+    cx, cy = centres[2]  # "20", at the left: printed radially it lies on its side
+    h = int(0.17 * CIRCLE[2])
+    mixed[int(cy - h):int(cy + h), int(cx - h):int(cx + h)] = radial[int(cy - h):int(cy + h), int(cx - h):int(cx + h)]
+    numbers, glyphs = reader.read_at_hints(mixed, centres, CIRCLE)
+    assert glyphs == 1 and 20 not in [v for _, v in read_numbers(numbers)] and len(numbers) == 10
+    texts, _ = reader.read_quick(mixed, CIRCLE, centres)
+    assert texts is not None and sorted(v for _, v in read_numbers(texts)) == values
+    numbers, glyphs = reader.read_at_hints(radial, centres, CIRCLE)
+    assert glyphs > 0.25 * (len(numbers) + glyphs)
+    assert reader.read_quick(radial, CIRCLE, centres)[0] is None
