@@ -11,7 +11,8 @@ So this look reads a window at every number peak near the scale ring, with the n
 (:mod:`gauged.reader.ocr.number_net`), for one guess of the numbers' size and orientation at a time:
 one dial prints its numbers at one height, either upright or turned radially. Each guess reads a
 value or nothing at each peak, and the values must fall on a line against the peaks' dial angles
-(:func:`gauged.geometry.scale_fit.fit_angle_value`, the scale stage's own fit). The guess whose
+(:func:`gauged.geometry.scale_fit.fit_angle_value`, the scale stage's own fit), rising either way
+round the dial. The guess whose
 line holds the most peaks wins; on a tie, the one whose numbers have more characters (a window too
 small cuts "200" to "20", a scale ten times too flat, while a window too large adds ticks and
 neighbours, which break the line), then the smaller angle residuals.
@@ -26,14 +27,15 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gauged.geometry.angles import unwrap
 from gauged.geometry.dial_frame import normalized_radius
-from gauged.geometry.scale_fit import fit_angle_value
+from gauged.geometry.scale_fit import AngleValueFit, fit_angle_value
+from gauged.reader.ocr.minus_sign import shows_minus
 from gauged.reader.ocr.number_net import NumberNet
 from gauged.reader.ocr.numbers import parse_number
 from gauged.reader.ocr.regions import NUMBER_BAND
@@ -63,6 +65,7 @@ class _Guess:
     markers: list[ScaleMarker]
     characters: int
     rms_angle: float
+    quads: list[np.ndarray]  # the markers' windows, frame px
 
     @property
     def agreeing(self) -> int:
@@ -110,7 +113,18 @@ def hint_markers(frame: np.ndarray, crop: Crop, arc: ScaleArc, numbers: Peaks, n
         guess = _read_guess(texts[k * len(at): (k + 1) * len(at)], quads, angles, radius, crop)
         if guess is not None and (best is None or guess.rank() > best.rank()):
             best = guess
-    return best.markers if best is not None and best.agreeing >= MIN_NUMBERS else None
+    if best is None or best.agreeing < MIN_NUMBERS:
+        return None
+    return [_with_seen_minus(m, frame, quad) for m, quad in zip(best.markers, best.quads, strict=True)]
+
+
+def _with_seen_minus(marker: ScaleMarker, frame: np.ndarray, quad: np.ndarray) -> ScaleMarker:
+    """``marker`` made negative when its window (``quad``, frame px) shows a minus the net did not
+    read (:func:`gauged.reader.ocr.minus_sign.shows_minus`): the net reads few signs, and without
+    them a -1..0 scale rising counter-clockwise is a 0..1 one rising clockwise."""
+    if marker.value <= 0 or marker.text.startswith("-") or not shows_minus(crop_quad(frame, quad)):
+        return marker
+    return replace(marker, text="-" + marker.text, value=-marker.value)
 
 
 def _read_guess(texts: list[str], quads: list[np.ndarray], angles: np.ndarray, radii: np.ndarray, crop: Crop
@@ -125,15 +139,27 @@ def _read_guess(texts: list[str], quads: list[np.ndarray], angles: np.ndarray, r
             read.append((k, text, parsed.value))
     if len(read) < 2:
         return None
-    fit = fit_angle_value(angles[[k for k, _, _ in read]], np.array([v for _, _, v in read]), min_inliers=2, expected_sign=1)
-    if isinstance(fit, StageFailure):
+    fit = _line(angles[[k for k, _, _ in read]], np.array([v for _, _, v in read]))
+    if fit is None:
         return None
     ring = float(np.median([radii[k] for (k, _, _), inlier in zip(read, fit.inliers, strict=True) if inlier]))
-    markers, characters = [], 0
+    markers, characters, windows = [], 0, []
     for (k, text, value), inlier in zip(read, fit.inliers, strict=True):
         if inlier and abs(radii[k] - ring) <= RING_WIDTH / 2:
             quad = crop.points_to_crop(quads[k])
             (x0, y0), (x1, y1) = quad.min(axis=0), quad.max(axis=0)
             markers.append(ScaleMarker(text, value, (float(x0), float(y0), float(x1), float(y1))))
+            windows.append(quads[k])
             characters += len(text)
-    return _Guess(markers, characters, fit.rms_angle)
+    return _Guess(markers, characters, fit.rms_angle, windows)
+
+
+def _line(angles: np.ndarray, values: np.ndarray) -> AngleValueFit | None:
+    """The line through the most of the numbers, rising clockwise or counter-clockwise (a tie stays
+    clockwise): the net reads no minus signs, so a 0..X scale rising counter-clockwise has its
+    numbers falling clockwise, and a clockwise-only line held two or three of its misreads at best
+    (the look read 1 of 6 counter-clockwise held-out renders it answered right). The scale stage
+    then takes the direction from the signs (:func:`gauged.reader.stages.scale.fit_scales`)."""
+    fits = [fit_angle_value(angles, values, min_inliers=2, expected_sign=sign) for sign in (1, -1)]
+    fits = [f for f in fits if not isinstance(f, StageFailure)]
+    return max(fits, key=lambda f: int(np.sum(f.inliers))) if fits else None

@@ -82,3 +82,28 @@ def test_no_peaks_no_look():
     from gauged.reader.stages.keypoints import Peaks
 
     assert hint_markers(np.zeros((64, 64, 3), np.uint8), _crop(), None, Peaks(np.zeros((0, 2)), np.zeros(0)), None) is None
+
+
+def test_a_guess_takes_numbers_falling_clockwise_too():
+    """A 0..40 scale rising counter-clockwise, read without signs: its numbers fall clockwise, and the
+    guess keeps all five on one line (the scale stage takes the direction from the signs)."""
+    angles = np.radians([0.0, 30.0, 60.0, 90.0, 120.0])
+    radii = np.full(5, 0.8)
+    quads = [window_quad(np.array([50.0 + 20 * k, 60.0]), 10.0, 30.0, np.array([0.0, -1.0])) for k in range(5)]
+    guess = _read_guess(["40", "30", "20", "10", "0"], quads, angles, radii, _crop())
+    assert guess is not None and [m.value for m in guess.markers] == [40.0, 30.0, 20.0, 10.0, 0.0]
+    rising = _read_guess(["0", "10", "20", "30", "7"], quads, angles, radii, _crop())
+    assert [m.value for m in rising.markers] == [0.0, 10.0, 20.0, 30.0]  # the misread "7" left out
+
+
+def test_a_minus_the_net_did_not_read_is_taken_from_the_window():
+    from gauged.reader.ocr.hint_numbers import _with_seen_minus
+    from gauged.types import ScaleMarker
+
+    frame = np.full((60, 240, 3), 225, np.uint8)
+    cv2.putText(frame, "-0.2", (10, 40), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (30, 30, 30), 2, cv2.LINE_AA)
+    cv2.putText(frame, "0.4", (140, 40), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (30, 30, 30), 2, cv2.LINE_AA)
+    signed = _with_seen_minus(ScaleMarker("0.2", 0.2, (0, 0, 1, 1)), frame, window_quad(np.array([60.0, 30.0]), 44.0, 110.0, np.array([0.0, -1.0])))
+    assert (signed.text, signed.value) == ("-0.2", -0.2)
+    plain = _with_seen_minus(ScaleMarker("0.4", 0.4, (0, 0, 1, 1)), frame, window_quad(np.array([180.0, 30.0]), 44.0, 100.0, np.array([0.0, -1.0])))
+    assert (plain.text, plain.value) == ("0.4", 0.4)
