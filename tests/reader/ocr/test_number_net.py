@@ -70,12 +70,16 @@ def _held_out(index: int) -> tuple[np.ndarray, dict]:
 
 
 def test_a_dial_refused_by_ppocr_numbers_is_read_by_the_number_net():
-    image, truth = _held_out(80)
-    with_net = build_reader(ReaderConfig(threads=1)).read_image(image)[0]
-    without = build_reader(ReaderConfig(threads=1, ocr_number_net=False)).read_image(image)[0]
-    assert without.failure is not None and without.failure.stage == "scale"
-    assert with_net.failure is None
-    assert abs(with_net.value.value - truth["value"]) <= 0.01 * (truth["max"] - truth["min"])
+    # Two held-out dials whose PP-OCR numbers leave two agreeing (render 80, used before, sits on the
+    # edge of the secondary-scale check and flips with the thread count and any OCR change).
+    reader = build_reader(ReaderConfig(threads=1))
+    without_net = build_reader(ReaderConfig(threads=1, ocr_number_net=False))
+    for index in (280, 422):
+        image, truth = _held_out(index)
+        with_net, without = reader.read_image(image)[0], without_net.read_image(image)[0]
+        assert without.failure is not None and without.failure.stage == "scale", index
+        assert with_net.failure is None and with_net.look == "number_net", index
+        assert abs(with_net.value.value - truth["value"]) <= 0.01 * (truth["max"] - truth["min"]), index
 
 
 def test_the_engine_takes_the_nets_numbers_only_inside_its_block():
