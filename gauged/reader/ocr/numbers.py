@@ -5,7 +5,7 @@ numeric (accuracy class "CL 1.6", the standard "EN 837-1", serial numbers, dates
 module turns strings into values while refusing what is not a scale number (:func:`parse_number`),
 joins numbers the detector split in two ("0" + ".6", "1" + "6"; :func:`gauged.reader.ocr.fragments.merge_fragments`), and keeps
 the markers consistent with a linear scale, whose numbers form an arithmetic progression evenly
-spaced in angle and increasing clockwise (:func:`filter_progression`).
+spaced in angle, rising clockwise or counter-clockwise (:func:`filter_progression`).
 
 Every rejection is a :class:`~gauged.types.StageFailure` (stage ``ocr``) or a ``(marker, reason)``
 pair with a short machine-readable reason. These verdicts on one string or one set of markers stay
@@ -230,7 +230,7 @@ def filter_progression(
     radius_tol: float = 0.2,
     min_markers: int = 3,
 ) -> ProgressionFit | StageFailure:
-    """Keep the markers that form one linear, clockwise-increasing scale; reject the rest.
+    """Keep the markers that form one linear scale, rising clockwise or counter-clockwise; reject the rest.
 
     ``markers`` need ``angle`` (image angle of the number's projection on the scale circle, see
     :mod:`gauged.types`); ``gap_angle`` is the middle of the gap between the scale's end and start
@@ -239,8 +239,12 @@ def filter_progression(
     are its inliers (a negative number whose sign may be a tick mark is also tried positive). When
     ``radii`` (distance of each marker from the dial centre) are given, inliers must lie within
     ``radius_tol`` (relative) of the pair's radius, which keeps a second, concentric scale apart.
-    The best line has the most inliers, then the most regular step (whole multiples of a common
-    step, a nice one preferred), then the larger radius, then the higher summed OCR score. Missing
+    The best line has the most inliers, then rises clockwise (a tie in numbers stays clockwise: the
+    scale stage weighs the signs, :func:`gauged.reader.stages.scale.fit_scales`), then the most
+    regular step (whole multiples of a common step, a nice one preferred), then the larger radius,
+    then the higher summed OCR score. Numbers falling clockwise are a 0..X scale rising
+    counter-clockwise, which prints no minus: a clockwise-only line kept two or three misreads of
+    it, or none, and the OCR's quick pass never ended on it. Missing
     numbers are fine: only consistency is required. Fails with ``too_few_numbers`` when fewer than
     ``min_markers`` markers (with angles) are given or agree.
     """
@@ -261,7 +265,7 @@ def filter_progression(
                 continue
             for vi in {vals[i], alts[i]}:
                 for vj in {vals[j], alts[j]}:
-                    if vj <= vi:
+                    if vj == vi:
                         continue
                     slope = (vj - vi) / (th[j] - th[i])
                     cand = _inliers(th, vals, alts, vi, th[i], slope, angle_tol)
@@ -275,7 +279,7 @@ def filter_progression(
                     step = _common_step(kv)
                     q = (kv - kv.min()) / step if step > 0 else kv * 0
                     regular = bool(np.all(np.abs(q - np.round(q)) < 1e-6 * np.maximum(1, q)))
-                    key = (len(cand), regular, regular and nice_step(step),
+                    key = (len(cand), slope > 0, regular, regular and nice_step(step),
                            0.0 if rad is None else round(float(np.median(rad[list(cand)])), 0),
                            float(score[list(cand)].sum()))
                     if best is None or key > best[0]:

@@ -62,6 +62,7 @@ from gauged.reader.ocr.minus_sign import shows_minus, with_seen_minus
 from gauged.reader.stages.crop import Crop
 from gauged.reader.stages.ellipse import ScaleArc
 from gauged.reader.stages.keypoints import Peaks
+from gauged.reader.stages.scale_checks import printed_decimal
 from gauged.types import ScaleMarker, StageFailure
 
 STAGE = "ocr"
@@ -187,7 +188,7 @@ class ScaleTextReader(DialTextReader):
             # decimal points they are the evidence (gauged.reader.stages.scale, dropped_decimal_point).
             taken = {m.box for m in kept}  # kept markers are copies (their value set): matched by box
             height = float(np.median([m.box[3] - m.box[1] for m in kept]))
-            markers = kept + [m for m in markers if m.box not in taken and m.value != round(m.value)
+            markers = kept + [m for m in markers if m.box not in taken and printed_decimal(m)
                               and m.box[3] - m.box[1] <= 1.5 * height]
         out = [ScaleMarker(m.text, m.value, _crop_box(matrix, m.box), None, None, m.score) for m in markers]
         return out, units

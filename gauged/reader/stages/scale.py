@@ -246,11 +246,14 @@ def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, directio
     model = _checked_ring(arc, ring, min_inliers, direction)
     if direction < 0:
         return model
-    counters = [_checked_ring(arc, _signs_as_read(ring), min_inliers, -1)]
+    tried = [_checked_ring(arc, _signs_as_read(ring), min_inliers, -1)]
     if any(_read_negative(m.text) for m in ring):
-        counters.append(_checked_ring(arc, _all_negative(ring), min_inliers, -1))
-    counters = [c for c in counters if not isinstance(c, StageFailure)]
+        tried.append(_checked_ring(arc, _all_negative(ring), min_inliers, -1))
+    counters = [c for c in tried if not isinstance(c, StageFailure)]
     if not counters:
+        if isinstance(model, StageFailure) and model.reason == "wrong_slope_sign":
+            # the numbers fall clockwise: the counter-clockwise line got further, and its reason is the one to give
+            return replace(tried[0], detail=f"counter-clockwise: {tried[0].detail}")
         return _signs_upheld(model)
     counter = max(counters, key=_evidence)
     if isinstance(model, StageFailure):

@@ -132,10 +132,17 @@ def test_filter_progression_separates_concentric_scales_by_radius():
     assert {reason for _, reason in fit.rejected} <= {"radius_outlier", "off_progression", "duplicate_value"}
 
 
-def test_filter_progression_refuses_counter_clockwise_and_too_few():
-    markers, radii = dial_markers([10, 8, 6, 4, 2])  # decreasing clockwise: no increasing scale
-    failure = filter_progression(markers, radii=radii)
-    assert not failure and failure.reason == "too_few_numbers"
+def test_filter_progression_keeps_a_counter_clockwise_scale_and_prefers_clockwise_on_a_tie():
+    markers, radii = dial_markers([10, 8, 6, 4, 2, 7])  # falling clockwise: a 0..10 scale rising counter-clockwise
+    fit = filter_progression(markers, radii=radii)
+    assert fit and [m.value for m in fit.kept] == [2, 4, 6, 8, 10] and fit.slope < 0  # the misread "7" left out
+    # "-20, -10, 0" clockwise rises as read and falls with its minus signs taken for ticks: as read wins
+    vacuum, r = dial_markers([-20, -10, 0])
+    fit = filter_progression(vacuum, radii=r)
+    assert fit and fit.slope > 0
+
+
+def test_filter_progression_refuses_too_few():
     two, r = dial_markers([0, 10])
     assert filter_progression(two, radii=r).reason == "too_few_numbers"
     no_angles = [ScaleMarker("1", 1.0, (0, 0, 1, 1)), ScaleMarker("2", 2.0, (0, 0, 1, 1)), ScaleMarker("3", 3.0, (0, 0, 1, 1))]

@@ -88,6 +88,12 @@ def test_whole_numbers_with_a_decimal_one_on_their_line_are_a_dropped_decimal_po
     failure = fit_scales(arc, whole + [ScaleMarker("-0.5", -0.5, decimal.box)])
     assert isinstance(failure, StageFailure)
     assert (failure.stage, failure.reason) == ("scale", "dropped_decimal_point")
+    # so is a whole value printed with decimals: "1.0" where the line puts 10 ("5, 15, 25" read for
+    # "0.5, 1.5, 2.5" on a 0..2.5 dial answered 10x too high)
+    (at_ten,) = _ring(DIAL, values, 0.8, [10])
+    failure = fit_scales(arc, whole[:-1] + [ScaleMarker("1.0", 1.0, at_ten.box)])
+    assert isinstance(failure, StageFailure)
+    assert (failure.stage, failure.reason) == ("scale", "dropped_decimal_point")
     # a decimal elsewhere (an accuracy class "1.6" near the centre) is no such evidence
     (centre,) = _ring(DIAL, values, 0.1, [7])
     scales = fit_scales(arc, whole + [ScaleMarker("1.6", 1.6, centre.box)])
@@ -395,3 +401,4 @@ def test_a_tick_read_as_a_minus_does_not_turn_a_counter_clockwise_dial_negative(
     texts = [("-" if v == 100 else "") + f"{v:g}" for v in printed]
     (scale,) = fit_scales(arc, _counter_clockwise_vacuum([(t, -v) for t, v in zip(texts, printed)]))
     assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 250.0), abs=1e-6)
+
