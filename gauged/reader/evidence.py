@@ -19,7 +19,7 @@ import numpy as np
 
 from gauged.reader.gauge_read import GaugeRead
 from gauged.reader.ocr.numbers import MINUS_LIKE
-from gauged.reader.stages.scale import added_signs, overruled_signs
+from gauged.reader.stages.scale_direction import added_signs, direction_margin, overruled_signs
 
 # How the reading's scale was found (GaugeRead.look), most direct first.
 LOOKS = ("first", "number_net", "likely_scale", "hint", "pivot", "between_numbers", "known", "locked")
@@ -58,6 +58,7 @@ def evidence(read: GaugeRead) -> dict[str, float]:
         "minus_read": float(sum(m.text.strip()[:1] in MINUS_LIKE for m in read.markers if m.text.strip())),
         "decimal_numbers": float(any("." in m.text or "," in m.text for m in agreeing)),
         "falling": float(scale.slope < 0),
+        "direction_margin": float(direction_margin(arc, scale)),
         "full_circle": float(scale.full_circle),
         "edge": float(min(abs(value.position), abs(1 - value.position))),
         "crop_px": float(math.log2(max(1.0, read.box[2] - read.box[0]))),

@@ -2,8 +2,8 @@
 
 PP-OCR's recogniser often reads "-40" as "40" (and the number net never reads a sign): the dash is
 in the detected box, but decoded as nothing. The sign is what tells a clockwise -100..0 scale from a
-counter-clockwise 0..100 one (the numbers alone are mirror images, :func:`gauged.reader.stages.scale.
-_fit_ring`), so reading it wrong sends out a value of the wrong sign, off by up to twice the span.
+counter-clockwise 0..100 one (the numbers alone are mirror images, :func:`gauged.reader.stages.scale_direction.
+fit_ring`), so reading it wrong sends out a value of the wrong sign, off by up to twice the span.
 :func:`with_seen_minus` looks at each number read without a sign: a short horizontal bar of ink,
 level with the middle of the digits and left of the first one, in the text's upright line image, is a
 minus, and the text gets its "-". The scale stage then weighs the signs as read (``sign_edits``).

@@ -22,16 +22,15 @@ from gauged.geometry.angles import unwrap, wrap_angle, wrap_to_pi
 from gauged.geometry.dial_frame import dial_angle, normalized_radius
 from gauged.geometry.scale_fit import (
     RING_GAP,
-    fit_scale_model,
     marker_centres,
     number_rings,
 )
-from gauged.reader.ocr.numbers import MINUS_LIKE, round_step
+from gauged.reader.ocr.numbers import round_step
 from gauged.reader.ocr.scale_units import label_scales
 from gauged.reader.ocr.units import PrintedUnit
 from gauged.reader.stages.ellipse import MAX_SPAN, MIN_SPAN, ScaleArc
 from gauged.reader.stages.full_circle import fit_full_circle
-from gauged.reader.stages.scale_checks import CHECKS, agreeing_digit_values
+from gauged.reader.stages.scale_direction import fit_ring
 from gauged.types import ScaleMarker, ScaleModel, StageFailure
 
 STAGE = "scale"
@@ -46,14 +45,6 @@ GRID_OFF_SHARE = 0.3  # more than this share of them between grid lines refutes 
 ROUND_END = 0.25  # of the number step: how near whole multiples the numbers' line must put both scale ends
 END_WEIGHT = 2.0  # how many numbers each end counts as in the line fitted again through them (0.5, 1, 2 gave
 # 300 dev renders a mean error of 0.327, 0.329, 0.330%, the 21 real photos 0.55, 0.50, 0.46%)
-CLEARLY_MORE = 1  # evidence (distinct agreeing numbers less sign edits) by which a counter-clockwise
-# line must beat a clockwise one: a tie stays clockwise
-SIGNS_EVIDENCE = 3  # distinct agreeing numbers less sign edits a line that overrules read minus signs must keep
-MISSED_MINUS = 0.5  # what a line pays for each agreeing number it makes negative though no minus was read,
-# against 1 for a read minus it overrules: the recogniser drops a printed minus more often than not
-# ("-15, -20" beside "5, 30" on a -30..0 dial), but ticks read as minus signs are no rarity either
-# ("-50, 150, 250 ... -400" on a 0..400 dial); at 0.25, 5 of 34 wrong counter-clockwise readings
-# were fixed and 3 of 150 right clockwise ones broken, at 0.5 4 fixed and none broken
 RETRY_ZERO_MARGIN = 0.05  # of the span: a fitted end this far past zero is on the other side of it
 
 
@@ -91,12 +82,12 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[Pr
         return StageFailure(STAGE, "too_few_markers", "no scale number was read")
     whole: ScaleModel | StageFailure | None = None
     if len(rings) == 2:
-        whole = _fit_ring(arc, markers, min_inliers, direction)
+        whole = fit_ring(arc, markers, min_inliers, direction)
         if not isinstance(whole, StageFailure) and _spans_both(whole, rings):
             # one scale whose numbers only looked like two rings (a skewed ellipse)
             return _finished(arc, [whole], units)
     lone = len(rings) == 1
-    outer = _fit_ring(arc, rings[0], min_inliers, direction)
+    outer = fit_ring(arc, rings[0], min_inliers, direction)
     if isinstance(outer, StageFailure):
         rescued = _rescue(arc, markers, rings, whole)
         if rescued is None:
@@ -104,7 +95,7 @@ def fit_scales(arc: ScaleArc, markers: Sequence[ScaleMarker], units: Sequence[Pr
         scales, lone = [rescued], True  # checked as a lone ring is
     else:
         scales = [outer]
-        inner = None if lone else _fit_ring(arc, rings[1], min_inliers, direction)
+        inner = None if lone else fit_ring(arc, rings[1], min_inliers, direction)
         if inner is not None and not isinstance(inner, StageFailure):
             scales.append(inner)
     if lone:  # a lone ring must be the main scale, and the printed numbers must agree
@@ -229,147 +220,6 @@ def _from_ring(model: ScaleModel, ring: list[ScaleMarker]) -> int:
     """How many agreeing numbers of ``model`` come from ``ring``."""
     boxes = {m.box for m in ring}
     return sum(m.box in boxes for m in model.markers if m.inlier)
-
-
-def _fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int = 1) -> ScaleModel | StageFailure:
-    """The ring's scale rising in ``direction``; for +1 (the default: clockwise unless the evidence
-    says otherwise) the counter-clockwise line is fitted too and the better explained one kept.
-
-    The two directions of a dial are mirror images in the numbers alone: "0, -0.2, -0.4 ... -1.0"
-    clockwise is a -1..0 scale rising counter-clockwise, or, with every minus sign taken for a tick,
-    a 0..1 scale rising clockwise. What tells them apart is how many signs each must edit: a line is
-    scored by its distinct agreeing numbers less 1 for each read minus it overrules and
-    :data:`MISSED_MINUS` for each it adds (:func:`_evidence`). The counter-clockwise line is fitted
-    to the signs as read, and, when a minus was read, to every number negative (a vacuum scale whose
-    other minus signs went unread); it wins when it scores :data:`CLEARLY_MORE` more, and alone only
-    when it overrules no sign (and, adding some, keeps :data:`SIGNS_EVIDENCE`)."""
-    model = _checked_ring(arc, ring, min_inliers, direction)
-    if direction < 0:
-        return model
-    tried = [_checked_ring(arc, _signs_as_read(ring), min_inliers, -1)]
-    if any(_read_negative(m.text) for m in ring):
-        tried.append(_checked_ring(arc, _all_negative(ring), min_inliers, -1))
-    counters = [c for c in tried if not isinstance(c, StageFailure)]
-    if not counters:
-        if isinstance(model, StageFailure) and model.reason == "wrong_slope_sign":
-            # the numbers fall clockwise: the counter-clockwise line got further, and its reason is the one to give
-            return replace(tried[0], detail=f"counter-clockwise: {tried[0].detail}")
-        return _signs_upheld(model)
-    counter = max(counters, key=_evidence)
-    if isinstance(model, StageFailure):
-        if overruled_signs(counter) == 0 and (added_signs(counter) == 0 or _evidence(counter) >= SIGNS_EVIDENCE):
-            return counter
-        return model
-    return counter if _evidence(counter) >= _evidence(model) + CLEARLY_MORE else _signs_upheld(model)
-
-
-def _signs_upheld(model: ScaleModel | StageFailure) -> ScaleModel | StageFailure:
-    """``model``, unless it overrules minus signs read and keeps fewer than :data:`SIGNS_EVIDENCE`
-    distinct numbers of evidence once they are counted against it: a -1..0 scale rising
-    counter-clockwise whose fit that way failed (a number missed, a minus unseen) is otherwise read as
-    0..1 clockwise, the right magnitude with the wrong sign."""
-    if isinstance(model, StageFailure):
-        return model
-    edits = overruled_signs(model)
-    if edits and _evidence(model) < SIGNS_EVIDENCE:
-        return StageFailure(STAGE, "wrong_slope_sign", f"the line takes {edits} minus sign(s) read for ticks, "
-                            f"leaving {_evidence(model):g} distinct numbers of evidence, need {SIGNS_EVIDENCE}")
-    return model
-
-
-def sign_edits(model: ScaleModel) -> int:
-    """How many signs read on the dial ``model`` edits: :func:`overruled_signs` and :func:`added_signs`."""
-    return overruled_signs(model) + added_signs(model)
-
-
-def overruled_signs(model: ScaleModel) -> int:
-    """How many minus signs read on the dial ``model`` overrules: an agreeing number read with a minus
-    it gives a positive value (a minus taken for a tick, "-0.2" as 0.2), and a number read negative
-    that the fit left out but whose magnitude lies on its line (within a quarter step: "-1.0" where
-    the line puts 1.0)."""
-    return _overruled_agreeing(model) + len(_overruled_left_out(model))
-
-
-def _overruled_agreeing(model: ScaleModel) -> int:
-    """How many agreeing numbers of ``model`` were read with a minus it gives a positive value."""
-    return sum(_read_negative(m.text) and m.value > 0 for m in model.markers if m.inlier)
-
-
-def _overruled_left_out(model: ScaleModel) -> list[float]:
-    """The magnitudes of the numbers read negative that ``model`` leaves out but puts, unsigned, where
-    they are read (within a quarter step: "-1.0" where the line puts 1.0)."""
-    values = np.unique([m.value for m in model.markers if m.inlier])
-    step = round_step(values) if len(values) > 1 else 0.0
-    if step <= 0:
-        return []
-    return [-m.value for m in model.markers if not m.inlier and m.angle is not None and m.value < 0
-            and abs(model.value_at(m.angle) + m.value) <= 0.25 * step]
-
-
-def added_signs(model: ScaleModel) -> int:
-    """How many agreeing numbers of ``model`` are negative though their text shows no minus."""
-    return sum(m.value < 0 and not _read_negative(m.text) for m in model.markers if m.inlier)
-
-
-def _signs_as_read(ring: list[ScaleMarker]) -> list[ScaleMarker]:
-    """The markers with the signs their texts show: a reader blind to minus signs (the number net)
-    gives "-10" the value 10, and the likeliest number grid gives "1.2" the value -1.2 when it took
-    the ring for a scale of negatives whose minus signs went unseen (one "-1.4" read on a 0..1.6
-    dial rising counter-clockwise made it -1.6..0 clockwise)."""
-    return [replace(m, value=-m.value) if (m.value > 0) == _read_negative(m.text) and m.value != 0 else m
-            for m in ring]
-
-
-def _read_negative(text: str) -> bool:
-    text = text.strip()
-    return bool(text) and text[0] in MINUS_LIKE
-
-
-def _all_negative(ring: list[ScaleMarker]) -> list[ScaleMarker]:
-    """The markers of a scale of negatives up to 0 whose other minus signs went unread: every number
-    negative."""
-    return [replace(m, value=-m.value) if m.value > 0 else m for m in ring]
-
-
-def _evidence(model: ScaleModel) -> float:
-    """Distinct numbers the line explains less the signs it edits (:data:`MISSED_MINUS` for one it adds).
-
-    A number read negative that the line leaves out but whose magnitude it puts there ("-100" where it
-    puts 100) is explained with its sign overruled, as an agreeing "-0.2" taken as 0.2 is: counted, and
-    charged as an edit. Left uncounted, one tick read as a minus on a 0..250 dial rising
-    counter-clockwise made the line through its numbers, as read, lose to a clockwise -250..0 line
-    that adds four unread minus signs (the likeliest number grid proposes both)."""
-    left_out = _overruled_left_out(model)
-    overruled = _overruled_agreeing(model) + len(left_out)
-    return len(set(agreeing_digit_values(model)) | set(left_out)) - overruled - MISSED_MINUS * added_signs(model)
-
-
-def _checked_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction: int) -> ScaleModel | StageFailure:
-    model = fit_scale_model(arc.ellipse, ring, arc.start_angle, arc.end_angle, centre=arc.centre,
-                            min_inliers=min(min_inliers, max(2, len(ring))), expected_sign=direction)
-    if isinstance(model, StageFailure):
-        return model
-    if model.inliers < min_inliers:
-        return StageFailure(STAGE, "too_few_inliers", f"{model.inliers} consistent numbers, need {min_inliers}")
-    # A letter taken for a digit does not count towards the minimum: "S" read as 5 beside "15, 25"
-    # (a 0..2.5 bar render whose decimal points all went unread) made three agreeing numbers of a
-    # line 10x too steep, 516% off (a held-out render). The dev sets lost no reading to this rule.
-    values = agreeing_digit_values(model)
-    digits = len(values)
-    if digits < min_inliers:
-        return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers read as digits, need {min_inliers}")
-    # Nor does one number read twice: two boxes read "0" at one "0.05", beside "0.1", made a line
-    # through two printed numbers, -0.25..0.10 for a 0..0.25 dial, 176% off (a held-out render; with
-    # another, 6.9% off, the only reads of 1,308 on the dev, fresh, held-out and real sets with fewer
-    # than three distinct agreeing values).
-    distinct = len(set(values))
-    if distinct < min_inliers:
-        return StageFailure(STAGE, "too_few_inliers", f"{digits} consistent numbers but {distinct} distinct values, need {min_inliers}")
-    for check, _prevents in CHECKS:
-        failure = check(model)
-        if failure is not None:
-            return failure
-    return model
 
 
 def arc_at_values(arc: ScaleArc, scale: ScaleModel, low: float, high: float) -> ScaleArc | None:

@@ -402,3 +402,20 @@ def test_a_tick_read_as_a_minus_does_not_turn_a_counter_clockwise_dial_negative(
     (scale,) = fit_scales(arc, _counter_clockwise_vacuum([(t, -v) for t, v in zip(texts, printed)]))
     assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 250.0), abs=1e-6)
 
+
+def test_the_direction_margin_is_small_where_only_a_sign_or_two_tells_a_scale_from_its_mirror():
+    from gauged.reader.stages.scale_direction import direction_margin
+
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    printed = [0.0, -0.2, -0.4, -0.6, -0.8, -1.0]
+    # every minus read: the clockwise 0..1 mirror overrules five signs
+    (sure,) = fit_scales(arc, _counter_clockwise_vacuum([(f"{v:.1f}", v) for v in printed]))
+    # two of five minus signs read: the scale is still -1..0, but its mirror is close behind
+    texts = ["0.0", "0.2", "-0.4", "0.6", "-0.8", "1.0"]
+    (unsure,) = fit_scales(arc, _counter_clockwise_vacuum([(t, float(t)) for t in texts]))
+    assert direction_margin(arc, sure) > direction_margin(arc, unsure) + 2
+    # no sign read on a clockwise 0..10 dial: its mirror, -10..0 rising counter-clockwise, adds ten
+    # unread minus signs at 0.5 each
+    (plain,) = fit_scales(arc, _ring(DIAL, [float(v) for v in range(11)], 1.15))
+    assert direction_margin(arc, plain) == pytest.approx(5.0)
+
