@@ -146,8 +146,6 @@ class ScaleMarker:
 
     ``angle`` is the dial angle (radians, :func:`gauged.geometry.dial_frame.dial_angle`) of the
     number's centre, or ``None`` before projection. ``inlier`` is set by the RANSAC fit.
-    ``minus_odds`` is the recogniser's log-odds of a minus sign before the number's digits, None
-    when unknown (a configured scale, the number net).
     """
 
     text: str
@@ -156,7 +154,6 @@ class ScaleMarker:
     angle: float | None = None
     inlier: bool | None = None
     score: float = 1.0
-    minus_odds: float | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -115,7 +115,7 @@ class DialTextReader:
         first = self.engine.recognize([crop_quad(image, q) for q in quads])
         out = []
         for quad, rec in zip(quads, first, strict=True):
-            best = self.engine.text_box(rec, quad)
+            best = TextBox(rec.text, rec.score, np.asarray(quad, np.float32), rec.digits, rec.digits_score)
             if not _accepts(best, self.min_score) and _maybe_turned(best):
                 best = self._reorient(image, best, circle)
             if best.text and best.score >= self.min_score:
@@ -133,7 +133,7 @@ class DialTextReader:
         for k in order:
             quad = _turned(box.quad, k)
             rec = self.engine.recognize([crop_quad(image, quad)])[0]
-            cand = self.engine.text_box(rec, quad)
+            cand = TextBox(rec.text, rec.score, quad, rec.digits, rec.digits_score)
             if _accepts(cand, max(self.min_score, TURNED_MIN_SCORE)):
                 return cand
         return box
@@ -202,7 +202,7 @@ class DialTextReader:
         if not quads:
             return []
         recs = self.engine.recognize([crop_quad(image_bgr, q) for q in quads])
-        return [self.engine.text_box(rec, q)
+        return [TextBox(rec.text, rec.score, np.asarray(q, np.float32), rec.digits, rec.digits_score)
                 for q, rec in zip(quads, recs, strict=True) if rec.text and rec.score >= self.min_score]
 
     def read_quick(self, image_bgr: np.ndarray, circle: Circle, hints: np.ndarray | None, gap: float = math.pi / 2
@@ -265,5 +265,5 @@ class DialTextReader:
         out = []
         for quad, rec in zip(quads, self.engine.recognize([crop_quad(strip, q) for q in quads]), strict=True):
             if rec.text and rec.score >= self.min_score:
-                out.append(self.engine.text_box(rec, to_image(quad)))
+                out.append(TextBox(rec.text, rec.score, to_image(quad), rec.digits, rec.digits_score))
         return out

@@ -38,7 +38,6 @@ import numpy as np
 from gauged.reader.ocr.number_net import NumberNet
 from gauged.reader.ocr.text import (
     Recognition,
-    TextBox,
     TextQuad,
     ctc_greedy,
     ctc_log_likelihood,
@@ -66,7 +65,6 @@ REC_HEIGHT = 48
 REC_MIN_WIDTH = 128  # PaddleOCR pads to 48 x 320; 128 reads as well on gauge text and is 2-3x faster
 REC_BATCH = 8
 REC_MEMO = 1024  # line images remembered per dial: a dial's passes read some tens (30 renders: 524 in all)
-MINUS_ODDS_BOUND = 20.0  # |log-odds| of a minus sign kept: beyond it the columns leave no doubt either way
 DET_MEMO = 16  # images whose text detection is remembered per dial (the second look detects the first pass's ring again)
 
 
@@ -320,24 +318,6 @@ class OcrEngine:
                 rec = Recognition(text, rec.score, net_text, rec.digits_score, rec.digit_logp)
             out.append(rec)
         return out
-
-    def minus_odds(self, recognition: Recognition) -> float | None:
-        """log P("-" + u | the line) - log P(u | the line) for ``u`` the line's digits read without a
-        sign (:meth:`log_likelihood`): how much the recogniser's own columns favour a printed minus,
-        whether or not its best reading kept it. None when the digits hold no digit or the reading
-        was not made by the network."""
-        unsigned = recognition.digits.strip().lstrip("-−")
-        if recognition.digit_logp is None or not any(c.isdigit() for c in unsigned):
-            return None
-        signed, plain = self.log_likelihood(recognition, "-" + unsigned), self.log_likelihood(recognition, unsigned)
-        if math.isinf(signed) and math.isinf(plain):
-            return None
-        return float(np.clip(signed - plain, -MINUS_ODDS_BOUND, MINUS_ODDS_BOUND))
-
-    def text_box(self, recognition: Recognition, quad: np.ndarray) -> TextBox:
-        """The recognised text at ``quad`` (px), with its digits and :meth:`minus_odds`."""
-        return TextBox(recognition.text, recognition.score, np.asarray(quad, np.float32), recognition.digits,
-                       recognition.digits_score, self.minus_odds(recognition))
 
     def log_likelihood(self, recognition: Recognition, text: str) -> float:
         """log P(``text`` | the line) under the recogniser restricted to :data:`NUMBER_CHARS`, summed

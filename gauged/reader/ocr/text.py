@@ -43,16 +43,13 @@ class Recognition:
 class TextBox:
     """One recognised text: ``text`` and its recogniser ``score``, ``quad`` (4, 2) float corners in
     the pixel coordinates of the image given to the reader (``quad[0] -> quad[1]`` is the reading
-    direction, ``quad[0]`` the text's top-left), and the digits-only decoding of the same line.
-    ``minus_odds`` is the recogniser's log-odds of a minus before those digits
-    (:meth:`gauged.reader.ocr.engine.OcrEngine.minus_odds`), None when unknown."""
+    direction, ``quad[0]`` the text's top-left), and the digits-only decoding of the same line."""
 
     text: str
     score: float
     quad: np.ndarray
     digits: str = ""
     digits_score: float = 0.0
-    minus_odds: float | None = None
 
     @property
     def center(self) -> tuple[float, float]:
