@@ -157,6 +157,11 @@ def read_as_digits(text: str) -> bool:
 _DANGLING_POINT = re.compile(r"\d[.,]\s*$")
 
 
+def printed_decimal(marker: ScaleMarker) -> bool:
+    """Whether a number was read with decimals: a fraction, or a whole value printed with them ("1.0")."""
+    return marker.value != round(marker.value) or bool(re.search(r"\d[.,]\d", marker.text))
+
+
 def read_whole(text: str) -> bool:
     """Whether OCR read the number as digits (:func:`read_as_digits`) and whole, with no dangling
     point: the numbers a scale's evidence is made of."""

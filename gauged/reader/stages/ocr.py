@@ -59,10 +59,10 @@ from gauged.reader.ocr.units import (
     printed_units,
 )
 from gauged.reader.ocr.minus_sign import shows_minus, with_seen_minus
+from gauged.reader.ocr.numbers import printed_decimal
 from gauged.reader.stages.crop import Crop
 from gauged.reader.stages.ellipse import ScaleArc
 from gauged.reader.stages.keypoints import Peaks
-from gauged.reader.stages.scale_checks import printed_decimal
 from gauged.types import ScaleMarker, StageFailure
 
 STAGE = "ocr"

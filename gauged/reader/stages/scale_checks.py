@@ -18,8 +18,8 @@ from gauged.geometry.scale_fit import (
     SCALE_STAGE,
     fit_angle_value,
 )
-from gauged.reader.ocr.numbers import nice_step, read_as_digits, read_whole, round_step
-from gauged.types import ScaleMarker, ScaleModel, StageFailure
+from gauged.reader.ocr.numbers import nice_step, printed_decimal, read_as_digits, read_whole, round_step
+from gauged.types import ScaleModel, StageFailure
 
 STAGE = SCALE_STAGE
 
@@ -218,19 +218,14 @@ def _uncovered(model: ScaleModel) -> StageFailure | None:
     return None
 
 
-def printed_decimal(marker: ScaleMarker) -> bool:
-    """Whether a number was read with decimals: a fraction, or a whole value printed with them ("1.0")."""
-    return marker.value != round(marker.value) or bool(re.search(r"\d[.,]\d", marker.text))
-
-
 def _dropped_decimal_point(model: ScaleModel) -> StageFailure | None:
     """A failure when the agreeing numbers are whole but a decimal one on the same ring is them /10.
 
     OCR that drops the "0." of a decimal scale's numbers ("0.2" read "2") yields whole numbers that
     still agree on a line, and a reading ten times too large. When the same ring also holds a number
-    read with its decimals (:func:`printed_decimal`: "0.5", or "1.0" beside "5, 15, 25" read for
-    "0.5, 1.5, 2.5"), and that number times 10 or 100 lies where the line puts it, the scale is a
-    decimal one read wrong: it is refused.
+    read with its decimals (:func:`gauged.reader.ocr.numbers.printed_decimal`: "0.5", or "1.0"
+    beside "5, 15, 25" read for "0.5, 1.5, 2.5"), and that number times 10 or 100 lies where the
+    line puts it, the scale is a decimal one read wrong: it is refused.
     """
     inliers = [m for m in model.markers if m.inlier]
     # A scale that prints a whole value with decimals ("0.0", "1.0") prints every number so: one read
