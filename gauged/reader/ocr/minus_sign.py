@@ -11,13 +11,16 @@ minus, and the text gets its "-". The scale stage then weighs the signs as read 
 
 from __future__ import annotations
 
+import math
+import re
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Sequence
 
 import cv2
 import numpy as np
 
-from gauged.reader.ocr.text import TextBox, crop_quad
+from gauged.reader.ocr.text import Recognition, TextBox, crop_quad
 
 BAND = (0.25, 0.75)  # of the digits' extent, top to bottom: where a minus's ink lies
 CLEAR = (0.2, 0.8)  # ... and outside this band the columns of a minus hold no ink
@@ -26,18 +29,71 @@ BAR_THICK = 0.34  # of the height: the median column of a minus holds ink over a
 MIDDLE = (0.3, 0.62)  # ... and where the centre of its ink lies (a "4"'s crossbar lies lower)
 BAR_WIDTH = 0.25  # of the digits' height: the least length of a minus
 GAP_OR_DIGIT = 0.15  # of the height: how far the columns after the bar may run before a digit starts
+LEFT_MARGIN = 0.4  # of the box's height: how far left of a detected box its line is read again. The text
+# detector's box often ends at the first digit and leaves a small, faint minus outside it.
+MIN_WIDENED = 2  # numbers that must show a minus in their widened lines for any of those signs to count
+UNSIGNED_NUMBER = re.compile(r"\d+(?:[.,]\d+)?")
 
 
-def with_seen_minus(texts: Sequence[TextBox], image: np.ndarray) -> list[TextBox]:
+def with_seen_minus(texts: Sequence[TextBox], image: np.ndarray,
+                    read: Callable[[list[np.ndarray]], list[Recognition]] | None = None) -> list[TextBox]:
     """``texts`` with a "-" put before each number whose line in ``image`` shows a minus the
-    recogniser did not read."""
+    recogniser did not read: in its pixels (:func:`shows_minus`), or, with ``read`` (the
+    recogniser), in the line widened left (:func:`minus_left_of_box`)."""
+    widened = minus_left_of_box(texts, image, read) if read else set()
     out = []
-    for box in texts:
+    for k, box in enumerate(texts):
         text = box.text.strip()
-        if text[:1].isdigit() and shows_minus(crop_quad(image, box.quad)):
+        if text[:1].isdigit() and (k in widened or shows_minus(crop_quad(image, box.quad))):
             box = replace(box, text="-" + text)
         out.append(box)
     return out
+
+
+def minus_left_of_box(texts: Sequence[TextBox], image: np.ndarray,
+                      read: Callable[[list[np.ndarray]], list[Recognition]]) -> set[int]:
+    """Indices of the unsigned numbers of ``texts`` that ``read`` (the recogniser) reads as the same
+    digits after a minus once their line is widened left by :data:`LEFT_MARGIN` of its height;
+    only lines with ink there (:func:`ink_before`) are read again. The text detector's box often
+    starts at the first digit and leaves a small, faint minus outside.
+
+    A tick beside a number reads as a minus too, so the minus signs count only when
+    :data:`MIN_WIDENED` numbers show one (a scale prints its negative numbers by the several), and
+    a text that holds anything but digits and a decimal point (a tick read "15-") is not read again."""
+    unsigned = [k for k, box in enumerate(texts) if UNSIGNED_NUMBER.fullmatch(box.text.strip())]
+    lines = {k: crop_quad(image, left_extended(texts[k].quad, LEFT_MARGIN)) for k in unsigned}
+    inked = [k for k, line in lines.items() if ink_before(line, LEFT_MARGIN)]
+    if len(inked) < MIN_WIDENED:
+        return set()
+    found = {k for k, rec in zip(inked, read([lines[k] for k in inked]), strict=True) if rec.digits.replace("−", "-") == "-" + texts[k].text.strip()}
+    return found if len(found) >= MIN_WIDENED else set()
+
+
+def ink_before(line: np.ndarray, margin: float) -> bool:
+    """Whether the first ``margin`` x height columns of the upright line image hold any ink level
+    with the middle of the line (:data:`BAND`): the cheap test before a widened line is read again.
+    Ink is the darker side of the line's Otsu threshold (the lighter where that is most of it)."""
+    gray = cv2.cvtColor(line, cv2.COLOR_BGR2GRAY) if line.ndim == 3 else line
+    h = gray.shape[0]
+    width = int(round(margin * h))
+    if h < 8 or width < 2 or gray.shape[1] <= width:
+        return False
+    _, dark = cv2.threshold(gray, 0, 255, cv2.THRESH_BINARY_INV + cv2.THRESH_OTSU)
+    ink = dark > 0
+    if ink.mean() > 0.5:
+        ink = ~ink
+    band = ink[int(BAND[0] * h):int(math.ceil(BAND[1] * h)), :width]
+    return int(band.any(axis=0).sum()) >= max(2, int(0.1 * h))
+
+
+def left_extended(quad: np.ndarray, margin: float) -> np.ndarray:
+    """The text quad (top-left, top-right, bottom-right, bottom-left) with its left edge moved out
+    along the text's direction by ``margin`` times its height."""
+    q = np.asarray(quad, np.float32)
+    along = q[1] - q[0]
+    along = along / max(float(np.linalg.norm(along)), 1e-6)
+    shift = along * margin * float(np.linalg.norm(q[3] - q[0]))
+    return np.float32([q[0] - shift, q[1], q[2], q[3] - shift])
 
 
 def shows_minus(line: np.ndarray) -> bool:

@@ -169,7 +169,7 @@ class ScaleTextReader(DialTextReader):
             other = self._read_view(crop, arc, hints, detail, downs[1])
             if other.agreeing() > view.agreeing():
                 view = other
-        texts, circle, matrix = with_seen_minus(view.texts, view.image), view.circle, view.matrix
+        texts, circle, matrix = with_seen_minus(view.texts, view.image, self.engine.run_recogniser), view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, NO_TEXT, "no text found on the rectified dial")
         units = printed_units(texts, circle)

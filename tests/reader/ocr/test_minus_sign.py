@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gauged.reader.ocr.minus_sign import shows_minus, with_seen_minus
-from gauged.reader.ocr.text import TextBox
+from gauged.reader.ocr.text import TextBox, crop_quad
 
 
 def _line(text: str, scale: float = 1.0, blur: int = 0, light_on_dark: bool = False, font=cv2.FONT_HERSHEY_SIMPLEX):
@@ -50,3 +50,59 @@ def test_only_numbers_read_without_a_sign_get_one():
         quad = np.float32([[x, y], [x + line.shape[1], y], [x + line.shape[1], y + line.shape[0]], [x, y + line.shape[0]]])
         boxes.append(TextBox(text.lstrip("-") if n == 0 else text, 0.9, quad))  # the first read without its minus
     assert [b.text for b in with_seen_minus(boxes, image)] == ["-40", "40", "-60", "bar"]
+
+
+@pytest.fixture(scope="module")
+def engine():
+    from gauged.reader.ocr.engine import OcrEngine, OcrUnavailable
+
+    try:
+        return OcrEngine(threads=1)
+    except OcrUnavailable as exc:
+        pytest.skip(f"OCR models not installed: {exc}")
+
+
+FACE = (225, 230, 220)
+
+
+def _dial_line(texts: list[str], scale: float = 1.2) -> tuple[np.ndarray, list[np.ndarray]]:
+    """An image holding ``texts`` side by side and, for each, the quad the text detector often gives
+    it: from its first digit on, a minus left outside."""
+    thick = max(1, int(2 * scale))
+    image = np.full((120, 150 * len(texts), 3), FACE, np.uint8)
+    quads = []
+    for n, text in enumerate(texts):
+        x = 30 + 150 * n
+        cv2.putText(image, text, (x, 80), cv2.FONT_HERSHEY_SIMPLEX, scale, (20, 20, 20), thick, cv2.LINE_AA)
+        ink = np.abs(image[:, x - 10:x + 140].astype(int) - FACE).sum(axis=2) > 60
+        ys, xs = np.nonzero(ink)
+        minus = cv2.getTextSize("-", cv2.FONT_HERSHEY_SIMPLEX, scale, thick)[0][0] if text.startswith("-") else 0
+        x0, x1 = x + max(minus + 1, xs.min() - 10 - 3), x - 10 + xs.max() + 3
+        y0, y1 = ys.min() - 3, ys.max() + 3
+        quads.append(np.float32([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+    return image, quads
+
+
+@pytest.mark.parametrize("texts", [["-40", "-60"], ["-100", "-25", "-50"]])
+def test_minus_signs_left_outside_the_boxes_are_read_on_the_widened_lines(engine, texts):
+    image, quads = _dial_line(texts)
+    lines = [crop_quad(image, q) for q in quads]
+    read = [r.digits for r in engine.run_recogniser(lines)]
+    assert read == [t[1:] for t in texts], f"the boxes should hold the digits only, read {read}"
+    assert not any(shows_minus(line) for line in lines)
+    boxes = [TextBox(t, 0.9, q) for t, q in zip(read, quads)]
+    assert [b.text for b in with_seen_minus(boxes, image, engine.run_recogniser)] == texts
+    assert [b.text for b in with_seen_minus(boxes, image)] == read  # the pixels alone miss them
+
+
+def test_one_number_alone_with_a_minus_outside_its_box_keeps_its_reading(engine):
+    # A tick beside one number reads as a minus as well: one such sign on a dial is not counted.
+    image, quads = _dial_line(["-40", "60"])
+    boxes = [TextBox(t, 0.9, q) for t, q in zip(["40", "60"], quads)]
+    assert [b.text for b in with_seen_minus(boxes, image, engine.run_recogniser)] == ["40", "60"]
+
+
+def test_numbers_with_nothing_before_them_get_no_minus_from_the_widened_lines(engine):
+    image, quads = _dial_line(["40", "100", "25"])
+    boxes = [TextBox(t, 0.9, q) for t, q in zip(["40", "100", "25"], quads)]
+    assert [b.text for b in with_seen_minus(boxes, image, engine.run_recogniser)] == ["40", "100", "25"]
