@@ -65,7 +65,8 @@ def minus_left_of_box(texts: Sequence[TextBox], image: np.ndarray,
     inked = [k for k, line in lines.items() if ink_before(line, LEFT_MARGIN)]
     if len(inked) < MIN_WIDENED:
         return set()
-    found = {k for k, rec in zip(inked, read([lines[k] for k in inked]), strict=True) if rec.digits.replace("−", "-") == "-" + texts[k].text.strip()}
+    widened = read([lines[k] for k in inked])
+    found = {k for k, rec in zip(inked, widened, strict=True) if rec.digits.replace("−", "-") == "-" + texts[k].text.strip()}
     return found if len(found) >= MIN_WIDENED else set()
 
 

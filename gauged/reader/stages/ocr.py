@@ -169,6 +169,8 @@ class ScaleTextReader(DialTextReader):
             other = self._read_view(crop, arc, hints, detail, downs[1])
             if other.agreeing() > view.agreeing():
                 view = other
+        # The widened lines go to PP-OCR itself, never the number net of the retry: the net reads a tick
+        # beside a number as its minus (a clockwise 100..400 dial read -400..-100).
         texts, circle, matrix = with_seen_minus(view.texts, view.image, self.engine.run_recogniser), view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, NO_TEXT, "no text found on the rectified dial")
