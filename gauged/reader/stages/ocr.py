@@ -170,7 +170,7 @@ class ScaleTextReader(DialTextReader):
             if other.agreeing() > view.agreeing():
                 view = other
         # The widened lines go to PP-OCR itself, never the number net of the retry: the net reads a tick
-        # beside a number as its minus (a clockwise 100..400 dial read -400..-100).
+        # beside a number as its minus (a clockwise 0..400 dial at 173 was read -173).
         texts, circle, matrix = with_seen_minus(view.texts, view.image, self.engine.run_recogniser), view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, NO_TEXT, "no text found on the rectified dial")
