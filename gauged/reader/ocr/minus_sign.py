@@ -72,19 +72,23 @@ def minus_left_of_box(texts: Sequence[TextBox], image: np.ndarray,
 
 def ink_before(line: np.ndarray, margin: float) -> bool:
     """Whether the first ``margin`` x height columns of the upright line image hold any ink level
-    with the middle of the line (:data:`BAND`): the cheap test before a widened line is read again.
-    Ink is the darker side of the line's Otsu threshold (the lighter where that is most of it)."""
-    gray = cv2.cvtColor(line, cv2.COLOR_BGR2GRAY) if line.ndim == 3 else line
-    h = gray.shape[0]
+    with the middle of the line (:data:`BAND`): the cheap test before a widened line is read again."""
+    h, w = line.shape[:2]
     width = int(round(margin * h))
-    if h < 8 or width < 2 or gray.shape[1] <= width:
+    if h < 8 or width < 2 or w <= width:
         return False
-    _, dark = cv2.threshold(gray, 0, 255, cv2.THRESH_BINARY_INV + cv2.THRESH_OTSU)
-    ink = dark > 0
-    if ink.mean() > 0.5:
-        ink = ~ink
+    ink = _ink(line)
     band = ink[int(BAND[0] * h):int(math.ceil(BAND[1] * h)), :width]
     return int(band.any(axis=0).sum()) >= max(2, int(0.1 * h))
+
+
+def _ink(line: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the ink of a text line image, the darker side of its Otsu threshold, or the
+    lighter where that is most of the line (light text on a dark face: the ink is the minority)."""
+    gray = cv2.cvtColor(line, cv2.COLOR_BGR2GRAY) if line.ndim == 3 else line
+    _, dark = cv2.threshold(gray, 0, 255, cv2.THRESH_BINARY_INV + cv2.THRESH_OTSU)
+    ink = dark > 0
+    return ~ink if ink.mean() > 0.5 else ink
 
 
 def left_extended(quad: np.ndarray, margin: float) -> np.ndarray:
@@ -105,13 +109,9 @@ def shows_minus(line: np.ndarray) -> bool:
     Scanned by columns rather than by ink components, since a blurred minus runs into its digit.
     A "4"'s crossbar lies lower than a minus and a "7"'s bar at the top; round digits fill their
     leftmost columns from top to bottom."""
-    gray = cv2.cvtColor(line, cv2.COLOR_BGR2GRAY) if line.ndim == 3 else line
-    if min(gray.shape) < 8:
+    if min(line.shape[:2]) < 8:
         return False
-    _, dark = cv2.threshold(gray, 0, 255, cv2.THRESH_BINARY_INV + cv2.THRESH_OTSU)
-    ink = dark > 0
-    if ink.mean() > 0.5:  # light text on a dark face: the ink is the minority
-        ink = ~ink
+    ink = _ink(line)
     rows = ink.sum(axis=1)
     inked = np.flatnonzero(rows >= 0.15 * rows.max()) if rows.max() else np.zeros(0, int)
     if len(inked) < 6:
