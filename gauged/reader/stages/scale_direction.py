@@ -22,7 +22,9 @@ from gauged.types import ScaleMarker, ScaleModel, StageFailure
 STAGE = "scale"
 MIRROR_INLIERS = 3  # agreeing numbers a mirror line needs, as a scale does
 CLEARLY_MORE = 1  # evidence (distinct agreeing numbers less sign edits) by which a counter-clockwise
-# line must beat a clockwise one: a tie stays clockwise
+# line must beat a clockwise one: a tie stays clockwise, unless the clockwise line adds more unread minus
+# signs than the counter-clockwise one (a 0..60 scale rising counter-clockwise, one tick read as a minus,
+# is a -60..0 scale rising clockwise with three more signs added: the tie then goes counter-clockwise)
 SIGNS_EVIDENCE = 3  # distinct agreeing numbers less sign edits a line that overrules read minus signs must keep
 MISSED_MINUS = 0.5  # what a line pays for each agreeing number it makes negative though no minus was read,
 # against 1 for a read minus it overrules: the recogniser drops a printed minus more often than not
@@ -41,8 +43,9 @@ def fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction
     scored by its distinct agreeing numbers less 1 for each read minus it overrules and
     :data:`MISSED_MINUS` for each it adds (:func:`_evidence`). The counter-clockwise line is fitted
     to the signs as read, and, when a minus was read, to every number negative (a vacuum scale whose
-    other minus signs went unread); it wins when it scores :data:`CLEARLY_MORE` more, and alone only
-    when it overrules no sign (and, adding some, keeps :data:`SIGNS_EVIDENCE`)."""
+    other minus signs went unread); it wins when it scores :data:`CLEARLY_MORE` more (as much, when the
+    clockwise line adds more unread signs than it does), and alone only when it overrules no sign (and,
+    adding some, keeps :data:`SIGNS_EVIDENCE`)."""
     model = checked_ring(arc, ring, min_inliers, direction)
     if direction < 0:
         return model
@@ -60,7 +63,8 @@ def fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction
         if overruled_signs(counter) == 0 and (added_signs(counter) == 0 or _evidence(counter) >= SIGNS_EVIDENCE):
             return counter
         return model
-    return counter if _evidence(counter) >= _evidence(model) + CLEARLY_MORE else _signs_upheld(model)
+    needed = 0 if added_signs(model) > added_signs(counter) else CLEARLY_MORE
+    return counter if _evidence(counter) >= _evidence(model) + needed else _signs_upheld(model)
 
 
 def _signs_upheld(model: ScaleModel | StageFailure) -> ScaleModel | StageFailure:

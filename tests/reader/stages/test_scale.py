@@ -403,6 +403,23 @@ def test_a_tick_read_as_a_minus_does_not_turn_a_counter_clockwise_dial_negative(
     assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 250.0), abs=1e-6)
 
 
+def test_a_tie_between_mirror_lines_goes_to_the_one_that_adds_no_unread_signs():
+    """A 0..40 dial rising counter-clockwise with one tick read as a minus ("-20"), valued by a number
+    grid that took it for a -40..0 scale rising clockwise. The line through the numbers as read
+    explains all five, "-20" with its sign overruled (5 - 1); the clockwise one adds three unread
+    signs (5 - 3 x 0.5). Counter-clockwise is short of the clockwise line's lead by half a number, but
+    the clockwise line stands only on signs nobody read: the dial is read as printed."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    printed = [40.0, 30.0, 20.0, 10.0, 0.0]
+    texts = [("-" if v == 20 else "") + f"{v:g}" for v in printed]
+    (scale,) = fit_scales(arc, _counter_clockwise_vacuum([(t, -v) for t, v in zip(texts, printed)]))
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 40.0), abs=1e-6)
+    # with those three minus signs read, the numbers are a -40..0 scale rising clockwise
+    signed = [("-" if v else "") + f"{v:g}" for v in printed]
+    (scale,) = fit_scales(arc, _counter_clockwise_vacuum([(t, -v) for t, v in zip(signed, printed)]))
+    assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((-40.0, 0.0), abs=1e-6)
+
+
 def test_the_direction_margin_is_small_where_only_a_sign_or_two_tells_a_scale_from_its_mirror():
     from gauged.reader.stages.scale_direction import direction_margin
 
