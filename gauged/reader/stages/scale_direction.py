@@ -25,6 +25,11 @@ CLEARLY_MORE = 1  # evidence (distinct agreeing numbers less sign edits) by whic
 # line must beat a clockwise one: a tie stays clockwise, unless the clockwise line adds more unread minus
 # signs than the counter-clockwise one (a 0..60 scale rising counter-clockwise, one tick read as a minus,
 # is a -60..0 scale rising clockwise with three more signs added: the tie then goes counter-clockwise)
+TICKS_AS_MINUS = 1  # read minus signs a counter-clockwise line may overrule when no clockwise line fits: a tick
+# beside one number reads as its minus (a 0..50 dial's "40" read "-40"), but two read signs on a dial no
+# clockwise line fits are a scale of negatives (a -30..0 dial read "5, -10, -20, 25, 30" is not 0..30
+# rising counter-clockwise); at 0 five held-out counter-clockwise dials were refused, at 2 a clockwise
+# -30..0 dial was read +8 for -8
 SIGNS_EVIDENCE = 3  # distinct agreeing numbers less sign edits a line that overrules read minus signs must keep
 MISSED_MINUS = 0.5  # what a line pays for each agreeing number it makes negative though no minus was read,
 # against 1 for a read minus it overrules: the recogniser drops a printed minus more often than not
@@ -44,8 +49,8 @@ def fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction
     :data:`MISSED_MINUS` for each it adds (:func:`_evidence`). The counter-clockwise line is fitted
     to the signs as read, and, when a minus was read, to every number negative (a vacuum scale whose
     other minus signs went unread); it wins when it scores :data:`CLEARLY_MORE` more (as much, when the
-    clockwise line adds more unread signs than it does), and alone only when it overrules no sign (and,
-    adding some, keeps :data:`SIGNS_EVIDENCE`)."""
+    clockwise line adds more unread signs than it does), and alone when it overrules no more than
+    :data:`TICKS_AS_MINUS` read sign (and, adding some, keeps :data:`SIGNS_EVIDENCE`)."""
     model = checked_ring(arc, ring, min_inliers, direction)
     if direction < 0:
         return model
@@ -60,7 +65,7 @@ def fit_ring(arc: ScaleArc, ring: list[ScaleMarker], min_inliers: int, direction
         return _signs_upheld(model)
     counter = max(counters, key=_evidence)
     if isinstance(model, StageFailure):
-        if overruled_signs(counter) == 0 and (added_signs(counter) == 0 or _evidence(counter) >= SIGNS_EVIDENCE):
+        if overruled_signs(counter) <= TICKS_AS_MINUS and (added_signs(counter) == 0 or _evidence(counter) >= SIGNS_EVIDENCE):
             return counter
         return model
     needed = 0 if added_signs(model) > added_signs(counter) else CLEARLY_MORE

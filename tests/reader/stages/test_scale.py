@@ -420,6 +420,32 @@ def test_a_tie_between_mirror_lines_goes_to_the_one_that_adds_no_unread_signs():
     assert scale.slope > 0 and (scale.min_value, scale.max_value) == pytest.approx((-40.0, 0.0), abs=1e-6)
 
 
+def test_a_counter_clockwise_line_alone_may_overrule_one_read_sign():
+    """A 0..50 dial rising counter-clockwise with a tick read as the minus of its "40": no clockwise
+    line fits, and the counter-clockwise one explains all six numbers, "-40" with its sign overruled
+    as a tick beside it."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    printed = [50.0, 40.0, 30.0, 20.0, 10.0, 0.0]
+    texts = [("-" if v == 40 else "") + f"{v:g}" for v in printed]
+    ring = _counter_clockwise_vacuum([(t, float(t)) for t in texts])
+    (scale,) = fit_scales(arc, ring)
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 50.0), abs=1e-6)
+
+
+def test_two_read_minus_signs_are_not_overruled_by_a_counter_clockwise_line_alone():
+    """A -30..0 dial rising clockwise read "30, 25, -20, -10, 5" (two minus signs seen, three dropped):
+    no clockwise line fits the values as read, and the counter-clockwise 0..30 line through "30, 25, 5"
+    would take both read signs for ticks. Two ticks read as minus signs are less likely than a scale
+    of negatives: refused, for a look that weighs the signs to read. One read sign is a tick."""
+    arc = fit_scale_arc(keypoints_for(DIAL, pivot=False), CROP)
+    texts = ["30", "25", "-20", "", "-10", "5", ""]
+    ring = [m for m in _counter_clockwise_vacuum([(t, float(t or 0)) for t in texts]) if m.text]
+    assert isinstance(fit_scales(arc, ring), StageFailure)
+    one = [replace(m, text="20", value=20.0) if m.text == "-20" else m for m in ring]
+    (scale,) = fit_scales(arc, one)
+    assert scale.slope < 0 and (scale.min_value, scale.max_value) == pytest.approx((0.0, 30.0), abs=1e-6)
+
+
 def test_the_direction_margin_is_small_where_only_a_sign_or_two_tells_a_scale_from_its_mirror():
     from gauged.reader.stages.scale_direction import direction_margin
 
