@@ -256,11 +256,15 @@ def test_reading_low_confidence_on_scattered_numbers_and_a_weak_needle():
     consistent = [_marker(dial, dial.start_deg + k * step, k) for k in (0, 4, 8)]
     values = np.random.default_rng(3).permutation(50)[:12] + 20  # misread numbers, none on the scale's line
     scattered = [_marker(dial, dial.start_deg + k * step + step / 2, v) for k, v in zip(range(12), values)]
-    scales = fit_scales(arc, consistent + scattered)
+    # two left out beside three agreeing (as many left out as agreeing is refused before the reading:
+    # numbers_outvoted)
+    scales = fit_scales(arc, consistent + scattered[:2])
     assert not isinstance(scales, StageFailure), scales
-    assert (scales[0].inliers, len(scales[0].markers)) == (3, 15)
-    weak = fit_needle(np.where(needle_prob(dial) >= 0.5, 0.55, 0.0).astype(np.float32), STRIDE, arc)
-    assert isinstance(weak, NeedleReading) and abs(weak.mask_score - 0.55) < 1e-6
+    assert (scales[0].inliers, len(scales[0].markers)) == (3, 5)
+    # a faint needle mask whose line passes 0.16 radii from the centre
+    faint = np.roll(np.where(needle_prob(dial) >= 0.5, 0.55, 0.0).astype(np.float32), 16, axis=0)
+    weak = fit_needle(faint, STRIDE, arc)
+    assert isinstance(weak, NeedleReading) and abs(weak.mask_score - 0.55) < 1e-6 and 0.15 < weak.offset < 0.2
 
     assert_failure(read_value(weak, arc, scales[0]), "reading", "low_confidence")
     # either weakness alone is still read (the confidence is a cube root of the product of the parts)
@@ -284,6 +288,21 @@ def test_ambiguous_numbers_when_the_left_out_numbers_make_as_good_a_line():
     right = [_marker(dial, dial.start_deg + k * step, 50 * k) for k in range(7)]
     scales = fit_scales(arc, right[:4] + markers[5:6])  # 0, 50, 100, 150 and a misread 25: one line
     assert not isinstance(scales, StageFailure) and scales[0].max_value == pytest.approx(300.0, abs=0.5)
+
+
+def test_numbers_outvoted_when_the_line_leaves_out_as_many_numbers_as_it_explains():
+    """Three misreads of a 0..10 dial on a line five times too steep ("5, 25, 45" at the places of
+    1, 5, 9) beside three numbers read at random ("1, 10, 22"): a line of chance, refused. With only
+    two numbers left out, the line's three stand."""
+    dial = Dial()
+    arc = arc_of(dial)
+    step = dial.span_deg / (dial.majors - 1)
+    line = [_marker(dial, dial.start_deg + k * step, 5 * k) for k in (1, 5, 9)]
+    scattered = [_marker(dial, dial.start_deg + k * step, v) for k, v in ((3, 1), (6, 10), (8, 22))]
+    assert_failure(fit_scales(arc, line + scattered), "scale", "numbers_outvoted")
+    scales = fit_scales(arc, line + scattered[:2])
+    assert not isinstance(scales, StageFailure), scales
+    assert scales[0].max_value == pytest.approx(50.0, abs=0.5)
 
 
 def test_scale_not_covered_when_consistent_numbers_leave_an_end_far_away():

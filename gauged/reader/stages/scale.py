@@ -36,7 +36,7 @@ from gauged.types import ScaleMarker, ScaleModel, StageFailure
 STAGE = "scale"
 REASONS = ("too_few_markers", "degenerate_fit", "wrong_slope_sign", "too_few_inliers", "scale_not_covered",
            "dropped_decimal_point", "irregular_numbers", "numbers_off_grid",
-           "secondary_scale_only", "ambiguous_numbers", "numbers_past_ends", "numbers_not_round")
+           "secondary_scale_only", "ambiguous_numbers", "numbers_past_ends", "numbers_not_round", "numbers_outvoted")
 INNER_RING = 0.8  # ring radii: read numbers inside this may be an inner scale if printed numbers lie further out
 SECONDARY_RADIUS = 0.62  # ring radii; main-scale numbers on 300 synthetic renders sit at >= 0.69 (1st pct)
 GRID_MIN_HINTS = 5  # confident number centres needed for the grid check

@@ -86,6 +86,22 @@ def _rival(model: ScaleModel) -> StageFailure | None:
     return None
 
 
+def _outvoted(model: ScaleModel) -> StageFailure | None:
+    """A failure when the line leaves out at least as many of its ring's read numbers as it explains.
+
+    A line that explains no more of the numbers than it contradicts is no evidence of the scale: a few
+    misreads fall on some line by chance. "4, 8, 24" of a 0..16 dial's "4, 6, 8, 10, 12, 14" (read
+    "4, 8, 1, 10, 22, 24") made a line twice too steep, 67% off, with "1, 10, 22" left out (a
+    held-out render). On the held-out sets and the real photos no right reading left out as many
+    numbers as it explained.
+    """
+    left_out = sum(1 for m in model.markers if not m.inlier and m.angle is not None)
+    if left_out >= model.inliers:
+        return StageFailure(STAGE, "numbers_outvoted", f"the line explains {model.inliers} read numbers "
+                            f"and leaves out {left_out}")
+    return None
+
+
 def _irregular(model: ScaleModel) -> StageFailure | None:
     """A failure when the agreeing numbers are not steps of one progression (10, 150, 200).
 
@@ -262,4 +278,5 @@ CHECKS = (
     (_uncovered, "wild extrapolation: read numbers far from an end of the scale"),
     (_dropped_decimal_point, "a scale 10x too large: decimal points the OCR dropped"),
     (_rival, "two lines as well supported by the numbers: the evidence does not say which is the scale"),
+    (_outvoted, "a line of chance misreads: as many read numbers left out as explained"),
 )
