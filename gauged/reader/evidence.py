@@ -42,6 +42,9 @@ def evidence(read: GaugeRead) -> dict[str, float]:
         "trust": value.trust,
         "needle_mask": float(needle.mask_score),
         "needle_offset": float(needle.offset),
+        # how far the needle's mask reaches from the centre, in radii: a short stroke is often the
+        # counterweight or a shadow taken for the needle, read 180 degrees off
+        "needle_reach": float(math.dist(needle.line.tip, arc.centre) / arc.ellipse.a),
         "notch_fit_share": float(arc.fit_share),
         "notches": float(len(arc.notches)),
         "ends_inferred": float(arc.ends_inferred),

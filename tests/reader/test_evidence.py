@@ -35,6 +35,8 @@ def test_a_read_with_a_configured_scale_names_its_look_and_parts():
     assert abs(terms["arc_span"] - dial.span_deg / 360) < 0.02
     assert terms["numbers"] == 0.0 and terms["falling"] == 0.0  # a prior prints no numbers; 0..10 rises
     assert abs(terms["edge"] - min(read.value.position, 1 - read.value.position)) < 1e-9
+    # the drawn needle reaches 0.85 radii from the centre (the mask is sampled at stride 2)
+    assert abs(terms["needle_reach"] - 0.85) < 0.05
 
 
 def test_a_refused_read_has_no_evidence():
