@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gauged.geometry.dial_frame import normalized_radius
 from gauged.reader.gauge_read import GaugeRead
 from gauged.reader.ocr.numbers import MINUS_LIKE
 from gauged.reader.stages.scale_direction import added_signs, direction_margin, overruled_signs
@@ -42,9 +43,9 @@ def evidence(read: GaugeRead) -> dict[str, float]:
         "trust": value.trust,
         "needle_mask": float(needle.mask_score),
         "needle_offset": float(needle.offset),
-        # how far the needle's mask reaches from the centre, in radii: a short stroke is often the
-        # counterweight or a shadow taken for the needle, read 180 degrees off
-        "needle_reach": float(math.dist(needle.line.tip, arc.centre) / arc.ellipse.a),
+        # how far the needle's mask reaches towards the scale ring (1 on it): a short stroke is often
+        # the counterweight or a shadow taken for the needle, read 180 degrees off
+        "needle_reach": float(normalized_radius(arc.ellipse, np.asarray([needle.line.tip], float))[0]),
         "notch_fit_share": float(arc.fit_share),
         "notches": float(len(arc.notches)),
         "ends_inferred": float(arc.ends_inferred),
