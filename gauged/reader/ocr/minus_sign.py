@@ -6,7 +6,11 @@ counter-clockwise 0..100 one (the numbers alone are mirror images, :func:`gauged
 fit_ring`), so reading it wrong sends out a value of the wrong sign, off by up to twice the span.
 :func:`with_seen_minus` looks at each number read without a sign: a short horizontal bar of ink,
 level with the middle of the digits and left of the first one, in the text's upright line image, is a
-minus, and the text gets its "-". The scale stage then weighs the signs as read (``sign_edits``).
+minus, and the text gets its "-". The recogniser reads the line again widened left (the detector's box
+often starts at the first digit); and the number net, which reads faint minus signs PP-OCR drops,
+reads the widened lines of every unsigned number, its signs counted only when they are those of a
+scale of negatives (:func:`minus_by_number_net`). The scale stage then weighs the signs as read
+(``sign_edits``).
 """
 
 from __future__ import annotations
@@ -32,15 +36,32 @@ GAP_OR_DIGIT = 0.15  # of the height: how far the columns after the bar may run 
 LEFT_MARGIN = 0.4  # of the box's height: how far left of a detected box its line is read again. The text
 # detector's box often ends at the first digit and leaves a small, faint minus outside it.
 MIN_WIDENED = 2  # numbers that must show a minus in their widened lines for any of those signs to count
+NET_SHARE = 0.75  # of a dial's unsigned numbers other than 0: how many the number net must read a minus
+# before in their widened lines for its signs to count. The net reads the faint, thin minus signs PP-OCR
+# decodes as nothing (a -30..0 dial's "30, 20, 15, 25, 5" all read "-" by the net, none by PP-OCR), but
+# also a tick or a blur beside a number as its minus: on 300 + 300 held-out renders, 54 of 1,628
+# positive numbers got one. At 0.5 two more counter-clockwise dials were read right, but 0..1 and
+# 0..0.25 dials with two such signs among three or four numbers were read negative (held-out, clockwise)
+TICKS_BEFORE = 0.7  # cosine between a number's "before" (left of its text) and the way to the scale ring
+# above which the ring's ticks stand level with its digits, just before them: the net's minus there is
+# no evidence: the number is not read, and counts as one without a minus ("0.05, 0.10" inside the ring at
+# 9 o'clock of a 0..0.25 dial were read "-0.05, -0.10" on the ring's ticks, and with "0.25" beside them
+# made a scale of negatives; "0.2, 0.4" of a 0..1 dial were read "-0.2, -0.4" beside a "1.0" on the ticks)
 UNSIGNED_NUMBER = re.compile(r"\d+(?:[.,]\d+)?")
 
 
 def with_seen_minus(texts: Sequence[TextBox], image: np.ndarray,
-                    read: Callable[[list[np.ndarray]], list[Recognition]] | None = None) -> list[TextBox]:
+                    read: Callable[[list[np.ndarray]], list[Recognition]] | None = None,
+                    net: Callable[[list[np.ndarray]], list[str]] | None = None,
+                    circle: tuple[float, float, float] | None = None) -> list[TextBox]:
     """``texts`` with a "-" put before each number whose line in ``image`` shows a minus the
     recogniser did not read: in its pixels (:func:`shows_minus`), or, with ``read`` (the
-    recogniser), in the line widened left (:func:`minus_left_of_box`)."""
+    recogniser), in the line widened left (:func:`minus_left_of_box`), or, with ``net`` (the number
+    net) and ``circle`` (the scale ring in ``image``, cx, cy, r), in the widened lines of a scale of
+    negatives (:func:`minus_by_number_net`)."""
     widened = minus_left_of_box(texts, image, read) if read else set()
+    if net is not None and circle is not None:
+        widened |= minus_by_number_net(texts, image, net, circle)
     out = []
     for k, box in enumerate(texts):
         text = box.text.strip()
@@ -68,6 +89,38 @@ def minus_left_of_box(texts: Sequence[TextBox], image: np.ndarray,
     widened = read([lines[k] for k in inked])
     found = {k for k, rec in zip(inked, widened, strict=True) if rec.digits.replace("−", "-") == "-" + texts[k].text.strip()}
     return found if len(found) >= MIN_WIDENED else set()
+
+
+def minus_by_number_net(texts: Sequence[TextBox], image: np.ndarray,
+                        net: Callable[[list[np.ndarray]], list[str]], circle: tuple[float, float, float]) -> set[int]:
+    """Indices of the unsigned numbers of ``texts`` other than 0 that ``net`` (the number net) reads
+    as the same digits after a minus once their line is widened left by :data:`LEFT_MARGIN` of its
+    height; none unless they are :data:`MIN_WIDENED` or more and :data:`NET_SHARE` of those numbers
+    (a scale of negatives prints its minus signs on all of its numbers but 0; a tick beside a number
+    reads as its minus on a few). Numbers whose line starts toward the scale ring ``circle``
+    (:func:`faces_ticks`) are not read: they count among the numbers, never among the signs."""
+    unsigned = [k for k, box in enumerate(texts) if UNSIGNED_NUMBER.fullmatch(box.text.strip())
+                and float(box.text.strip().replace(",", ".")) != 0]
+    readable = [k for k in unsigned if not faces_ticks(texts[k].quad, circle)]
+    if len(readable) < MIN_WIDENED:
+        return set()
+    reads = net([crop_quad(image, left_extended(texts[k].quad, LEFT_MARGIN)) for k in readable])
+    found = {k for k, text in zip(readable, reads, strict=True) if text == "-" + texts[k].text.strip()}
+    return found if len(found) >= max(MIN_WIDENED, NET_SHARE * len(unsigned)) else set()
+
+
+def faces_ticks(quad: np.ndarray, circle: tuple[float, float, float]) -> bool:
+    """Whether the text quad's "before" (against its reading direction) points at the scale ring
+    ``circle`` (cx, cy, r) within :data:`TICKS_BEFORE`: outward for a number inside the ring,
+    inward for one outside, where the ring's ticks run level with the digits."""
+    q = np.asarray(quad, np.float64)
+    before = q[0] - q[1]
+    centre = q.mean(axis=0) - np.asarray(circle[:2], np.float64)
+    distance, length = float(np.linalg.norm(centre)), float(np.linalg.norm(before))
+    if distance < 1e-6 or length < 1e-6:
+        return False
+    toward_ring = centre / distance if distance < circle[2] else -centre / distance
+    return float(before @ toward_ring) / length > TICKS_BEFORE
 
 
 def ink_before(line: np.ndarray, margin: float) -> bool:

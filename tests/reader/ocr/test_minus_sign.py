@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from gauged.reader.ocr.minus_sign import shows_minus, with_seen_minus
+from gauged.reader.ocr.minus_sign import LEFT_MARGIN, faces_ticks, left_extended, shows_minus, with_seen_minus
 from gauged.reader.ocr.text import TextBox, crop_quad
 
 
@@ -106,3 +106,83 @@ def test_numbers_with_nothing_before_them_get_no_minus_from_the_widened_lines(en
     image, quads = _dial_line(["40", "100", "25"])
     boxes = [TextBox(t, 0.9, q) for t, q in zip(["40", "100", "25"], quads)]
     assert [b.text for b in with_seen_minus(boxes, image, engine.run_recogniser)] == ["40", "100", "25"]
+
+
+@pytest.fixture(scope="module")
+def number_net():
+    from gauged.reader.factory import NUMBER_NET_MODEL, helper_model_path
+    from gauged.reader.ocr.number_net import NumberNet
+    from gauged.reader.onnx_model import ModelNotAvailable
+
+    try:
+        return NumberNet(helper_model_path(NUMBER_NET_MODEL), threads=1)
+    except ModelNotAvailable as exc:
+        pytest.skip(f"number net not installed: {exc}")
+
+
+def _faint_minus_line(texts: list[str], scale: float = 1.2) -> tuple[np.ndarray, list[np.ndarray]]:
+    """``texts`` side by side, each minus fainter and thinner than its digits, blurred; for each, the
+    quad the text detector often gives it: from its first digit on, the minus left outside."""
+    thick = max(1, int(2 * scale))
+    image = np.full((120, 150 * len(texts), 3), FACE, np.uint8)
+    quads = []
+    for n, text in enumerate(texts):
+        x = 30 + 150 * n
+        digits = text.lstrip("-")
+        minus = cv2.getTextSize("-", cv2.FONT_HERSHEY_SIMPLEX, scale, thick)[0][0]
+        if text.startswith("-"):
+            cv2.putText(image, "-", (x, 80), cv2.FONT_HERSHEY_SIMPLEX, scale, (120, 120, 120), thick - 1, cv2.LINE_AA)
+        cv2.putText(image, digits, (x + minus, 80), cv2.FONT_HERSHEY_SIMPLEX, scale, (20, 20, 20), thick, cv2.LINE_AA)
+        (w, h), _ = cv2.getTextSize(digits, cv2.FONT_HERSHEY_SIMPLEX, scale, thick)
+        x0, x1, y0, y1 = x + minus + 1, x + minus + w + 3, 80 - h - 3, 84
+        quads.append(np.float32([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+    return cv2.GaussianBlur(image, (0, 0), 1.0), quads
+
+
+def _ring_below(image: np.ndarray) -> tuple[float, float, float]:
+    """A scale ring (cx, cy, r) whose top, inside the ring, holds the line ``image``."""
+    return (image.shape[1] / 2, 5060.0, 5100.0)
+
+
+def test_the_number_nets_minus_signs_count_on_a_scale_of_negatives(number_net):
+    texts = ["-30", "-10", "-5", "0"]
+    image, quads = _faint_minus_line(texts)
+    boxes = [TextBox(t.lstrip("-"), 0.9, q) for t, q in zip(texts, quads)]
+    assert [b.text for b in with_seen_minus(boxes, image)] == ["30", "10", "5", "0"]  # the pixels alone miss them
+    assert [b.text for b in with_seen_minus(boxes, image, net=number_net.read, circle=_ring_below(image))] == texts
+
+
+def test_the_number_nets_minus_signs_on_a_few_numbers_of_a_dial_do_not_count(number_net):
+    # The net reads a tick beside a number as its minus: signs on fewer than half the numbers are not a
+    # scale of negatives. (The same three lines as above read "-" by the net, four positive numbers beside.)
+    texts = ["-30", "-10", "-5", "40", "60", "80", "100"]
+    image, quads = _faint_minus_line(texts)
+    boxes = [TextBox(t.lstrip("-"), 0.9, q) for t, q in zip(texts, quads)]
+    widened = [crop_quad(image, left_extended(q, LEFT_MARGIN)) for q in quads[:3]]
+    assert number_net.read(widened) == texts[:3], "the net should read the three minus signs on their own"
+    assert [b.text for b in with_seen_minus(boxes, image, net=number_net.read, circle=_ring_below(image))] == [t.lstrip("-") for t in texts]
+
+
+def test_the_number_nets_minus_signs_before_numbers_that_face_the_ticks_do_not_count(number_net):
+    # The same numbers at 9 o'clock inside their ring: their lines start toward the ring, whose ticks
+    # run level with the digits there and read as minus signs.
+    texts = ["-30", "-10", "-5", "0"]
+    image, quads = _faint_minus_line(texts)
+    boxes = [TextBox(t.lstrip("-"), 0.9, q) for t, q in zip(texts, quads)]
+    at_nine = (image.shape[1] + 300.0, 60.0, image.shape[1] + 320.0)
+    assert all(faces_ticks(q, at_nine) for q in quads) and not any(faces_ticks(q, _ring_below(image)) for q in quads)
+    assert [b.text for b in with_seen_minus(boxes, image, net=number_net.read, circle=at_nine)] == ["30", "10", "5", "0"]
+
+
+def test_numbers_that_face_the_ticks_count_among_the_numbers_but_never_among_the_signs(number_net):
+    # A "40" at 9 o'clock on the ring's ticks beside two numbers the net reads with a minus (a tick or a
+    # blur beside them): two signs of three numbers are not a scale of negatives, though both the net
+    # reads count.
+    texts = ["40", "-10", "-5"]
+    image, quads = _faint_minus_line(texts)
+    boxes = [TextBox(t.lstrip("-"), 0.9, q) for t, q in zip(texts, quads)]
+    ring = (float(image.shape[1]), 360.0, 1000.0)
+    assert [faces_ticks(q, ring) for q in quads] == [True, False, False]
+    widened = [crop_quad(image, left_extended(q, LEFT_MARGIN)) for q in quads[1:]]
+    assert number_net.read(widened) == texts[1:], "the net should read the two minus signs on their own"
+    assert [b.text for b in with_seen_minus(boxes, image, net=number_net.read, circle=ring)] == ["40", "10", "5"]
