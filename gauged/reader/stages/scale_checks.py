@@ -25,30 +25,15 @@ STAGE = SCALE_STAGE
 
 
 STEP_TOLERANCE = 0.1  # of the smallest step: differences of agreeing numbers must be whole multiples of it
-
-
 DECIMAL_MATCH = 0.3  # of a number step: a decimal number x10 this close to the line betrays dropped points
-
-
 COVER_STEPS = 2.5  # the read numbers must reach within this many number steps of both scale ends (1.5
-
-
 # refused 26 of 300 synthetic renders, 14 of which 2.5 reads within 2.1%; the bunched-numbers case stays refused)
 COVER_STEPS_SURE = 3.5  # ... or this many when SURE_NUMBERS distinct numbers read as digits agree (dev sets: 300
-
-
-SURE_NUMBERS = 4  # synthetic + 21 real, 5 more reads all within 1.2%; every wild read had 3 numbers or a 4.8-step gap)
-
-
+# synthetic + 21 real, 5 more reads all within 1.2%; every wild read had 3 numbers or a 4.8-step gap)
+SURE_NUMBERS = 4
 GRID_MAX_STEPS = 50  # round steps between a scale's lowest and highest agreeing number (a dial prints ~5-20)
-
-
 TURN_TOLERANCE = math.radians(6.0)  # dial angle: how near a number a turn on must lie to where the line puts it
-
-
 TURN_STEPS = 2.5  # ... and how many of the agreeing numbers' steps past the fitted ends its value may be
-
-
 PAST_END = 0.5  # of the fitted range: an agreeing number this far past a scale end refutes the fit (1,308 reads
 # of the synthetic dev, fresh and held-out sets and the 21 real photos: right ones <= 0.35, the one wild read 1.58)
 
