@@ -1,0 +1,118 @@
+"""How well does the number net tell a minus the text box left out from a tick or a blur beside a number?
+
+Reads each render of a synthetic set with the shipped reader and, wherever the minus look
+(:func:`gauged.reader.ocr.minus_sign.minus_by_number_net`) runs, scores every unsigned number other than
+0 in its line widened left: the net's greedy string, and its CTC log-odds log P("-" + digits) -
+log P(digits). The truth is the label's primary scale: the number is printed with a minus when only
+"-" + digits is among its texts, without when only the digits are (mixed cases are left out). Prints
+the odds' percentiles by truth and by whether the line faces the ring's ticks, per-number hit rates
+at a few thresholds, and per dial how often a share rule signs a dial of negatives or a positive one.
+
+    python bench/investigations/net_minus_odds.py --data DIR [--data DIR2] [--count 400] [--out rows.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from collections import defaultdict
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+import gauged.reader.ocr.minus_sign as minus_sign
+from gauged.config.model import ReaderConfig
+from gauged.reader.factory import build_reader
+from gauged.reader.ocr.number_net import CHARS, greedy_decode, to_line_input
+from gauged.reader.ocr.text import crop_quad, ctc_log_likelihood
+
+
+def _log_softmax(logits: np.ndarray) -> np.ndarray:
+    top = logits.max(axis=-1, keepdims=True)
+    return logits - top - np.log(np.exp(logits - top).sum(axis=-1, keepdims=True))
+
+
+def collect(folder: Path, count: int) -> list[dict]:
+    reader = build_reader(ReaderConfig())
+    session = reader.ocr.engine.number_net.session
+    rows: list[dict] = []
+    current: dict = {}
+    look = minus_sign.minus_by_number_net
+
+    def scored(texts, image, net, circle):
+        for box in texts:
+            text = box.text.strip()
+            if not minus_sign.UNSIGNED_NUMBER.fullmatch(text) or float(text.replace(",", ".")) == 0:
+                continue
+            plain, signed = text in current["texts"], "-" + text in current["texts"]
+            if plain == signed:
+                continue
+            line = crop_quad(image, minus_sign.left_extended(box.quad, minus_sign.LEFT_MARGIN))
+            logits = session.run(None, {"line": to_line_input(line)[None, None].astype(np.float32) / 255})[0]
+            logp = _log_softmax(logits[0].astype(np.float64))
+            labels = [CHARS.index(c) + 1 for c in text]
+            odds = ctc_log_likelihood(logp, [CHARS.index("-") + 1, *labels]) - ctc_log_likelihood(logp, labels)
+            rows.append({"set": folder.name, "image": current["image"], "text": text, "minus": signed,
+                         "odds": odds if math.isfinite(odds) else -99.0, "read": greedy_decode(logits)[0],
+                         "faces": bool(minus_sign.faces_ticks(box.quad, circle))})
+        return look(texts, image, net, circle)
+
+    minus_sign.minus_by_number_net = scored
+    try:
+        labels = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][:count]
+        for n, label in enumerate(labels, 1):
+            scale = next(s for s in label["gauges"][0]["scales"] if s["role"] == "primary")
+            current.update(image=label["image"], texts={x["text"].replace("\u2212", "-") for x in scale["numbers"]})
+            reader.read_image(cv2.imread(str(folder / label["image"])))
+            if n % 50 == 0:
+                print(f"{folder.name}: {n}/{len(labels)} renders, {len(rows)} numbers", flush=True)
+    finally:
+        minus_sign.minus_by_number_net = look
+    return rows
+
+
+def report(rows: list[dict]) -> None:
+    for faces in (False, True):
+        for minus in (True, False):
+            odds = np.array([r["odds"] for r in rows if r["minus"] == minus and r["faces"] == faces])
+            if len(odds):
+                greedy = sum(r["read"] == "-" + r["text"] for r in rows if r["minus"] == minus and r["faces"] == faces)
+                print(f"faces ticks {faces!s:5} minus printed {minus!s:5}: {len(odds):5} numbers, odds p5/p25/p50/p75/p95 "
+                      f"{np.percentile(odds, [5, 25, 50, 75, 95]).round(1).tolist()}, net's string '-' + digits {greedy}")
+    readable = [r for r in rows if not r["faces"]]
+    for cut in (0.0, 2.0, 4.0, 6.0):
+        hit = sum(r["minus"] and r["odds"] > cut for r in readable)
+        false = sum(not r["minus"] and r["odds"] > cut for r in readable)
+        print(f"odds > {cut:g}: {hit} of {sum(r['minus'] for r in readable)} printed minus signs, "
+              f"{false} of {sum(not r['minus'] for r in readable)} numbers without")
+    dials = defaultdict(list)
+    for r in rows:
+        dials[(r["set"], r["image"])].append(r)
+    negative = [k for k, rs in dials.items() if all(r["minus"] for r in rs)]
+    positive = [k for k, rs in dials.items() if not any(r["minus"] for r in rs)]
+    rules = {"net's string, share 0.75": lambda r: r["read"] == "-" + r["text"],
+             "odds > 2, share 0.75": lambda r: r["odds"] > 2.0}
+    for name, seen in rules.items():
+        def signs(rs):
+            hits = sum(seen(r) for r in rs if not r["faces"])
+            return sum(not r["faces"] for r in rs) >= 2 and hits >= max(2, 0.75 * len(rs))
+        print(f"{name}: {sum(signs(dials[k]) for k in negative)} of {len(negative)} dials of negatives signed, "
+              f"{sum(signs(dials[k]) for k in positive)} of {len(positive)} positive dials")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path, action="append", required=True, help="a `gauged synth images` folder (repeatable)")
+    parser.add_argument("--count", type=int, default=400, help="renders read from each folder")
+    parser.add_argument("--out", type=Path, help="write the per-number rows here as JSON")
+    args = parser.parse_args()
+    rows = [row for folder in args.data for row in collect(folder, args.count)]
+    if args.out:
+        args.out.write_text(json.dumps(rows))
+    report(rows)
+
+
+if __name__ == "__main__":
+    main()
