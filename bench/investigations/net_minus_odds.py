@@ -1,7 +1,7 @@
 """How well does the number net tell a minus the text box left out from a tick or a blur beside a number?
 
 Reads each render of a synthetic set with the shipped reader and, wherever the minus look
-(:func:`gauged.reader.ocr.minus_sign.minus_by_number_net`) runs, scores every unsigned number other than
+(:func:`gauged.reader.ocr.minus_sign.number_net_reads`) runs, scores every unsigned number other than
 0 in its line widened left: the net's greedy string, and its CTC log-odds log P("-" + digits) -
 log P(digits). The truth is the label's primary scale: the number is printed with a minus when only
 "-" + digits is among its texts, without when only the digits are (mixed cases are left out). Prints
@@ -39,7 +39,7 @@ def collect(folder: Path, count: int) -> list[dict]:
     session = reader.ocr.engine.number_net.session
     rows: list[dict] = []
     current: dict = {}
-    look = minus_sign.minus_by_number_net
+    look = minus_sign.number_net_reads
 
     def scored(texts, image, net, circle):
         for box in texts:
@@ -59,7 +59,7 @@ def collect(folder: Path, count: int) -> list[dict]:
                          "faces": bool(minus_sign.faces_ticks(box.quad, circle))})
         return look(texts, image, net, circle)
 
-    minus_sign.minus_by_number_net = scored
+    minus_sign.number_net_reads = scored
     try:
         labels = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][:count]
         for n, label in enumerate(labels, 1):
@@ -69,7 +69,7 @@ def collect(folder: Path, count: int) -> list[dict]:
             if n % 50 == 0:
                 print(f"{folder.name}: {n}/{len(labels)} renders, {len(rows)} numbers", flush=True)
     finally:
-        minus_sign.minus_by_number_net = look
+        minus_sign.number_net_reads = look
     return rows
 
 

@@ -60,6 +60,9 @@ def evidence(read: GaugeRead) -> dict[str, float]:
         "signs_overruled": float(overruled_signs(scale)),
         "signs_added": float(added_signs(scale)),
         "minus_read": float(sum(m.text.strip()[:1] in MINUS_LIKE for m in read.markers if m.text.strip())),
+        # agreeing numbers the reading puts above 0 before which the number net read a minus (its signs
+        # not counted: too few of the dial's numbers showed one), the doubt of a mirror-image reading
+        "net_minus_against": float(sum(m.net_minus and m.value > 0 for m in agreeing)),
         "decimal_numbers": float(any("." in m.text or "," in m.text for m in agreeing)),
         "falling": float(scale.slope < 0),
         "direction_margin": float(direction_margin(arc, scale)),

@@ -10,6 +10,7 @@ import numpy as np
 from gauged.reader.evidence import LOOKS, Calibration, evidence
 from gauged.reader.gauge_read import GaugeRead, KnownScale
 from gauged.reader.pipeline import GaugeReader
+from gauged.types import ScaleMarker
 
 from .dial_maps import CROP, Dial
 from .test_failure_reasons import DialCropModel
@@ -80,3 +81,15 @@ def test_the_shipped_calibration_loads_and_knows_its_terms():
     calibration = Calibration.load()
     assert calibration is not None, "gauged/models/confidence.json is shipped"
     assert set(calibration.terms) <= set(evidence(_known_read(GaugeReader(DialCropModel(Dial()), ocr=None))))
+
+
+def test_net_minus_against_counts_the_agreeing_positive_numbers_the_number_net_saw_a_minus_before():
+    read = _known_read(GaugeReader(DialCropModel(Dial()), ocr=None))
+    box = (0.0, 0.0, 10.0, 10.0)
+    markers = (ScaleMarker("2", 2.0, box, 0.1, True, net_minus=True),
+               ScaleMarker("4", 4.0, box, 0.2, True, net_minus=True),
+               ScaleMarker("6", 6.0, box, 0.3, True),  # no minus seen
+               ScaleMarker("-8", -8.0, box, 0.4, True, net_minus=True),  # a negative number: the minus agrees
+               ScaleMarker("5", 5.0, box, 0.5, False, net_minus=True))  # left out of the line
+    read.scales = [replace(read.scales[0], markers=markers)]
+    assert evidence(read)["net_minus_against"] == 2.0

@@ -83,7 +83,7 @@ def scale_markers(texts: Sequence[TextBox], circle: Circle) -> list[ScaleMarker]
             w, h = b.box[2] - b.box[0], b.box[3] - b.box[1]
             angle = math.atan2(cy - circle[1], cx - circle[0])
             out.append(ScaleMarker(b.text, parsed.value, (cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2), angle,
-                                   None, b.score))
+                                   None, b.score, b.net_minus))
     return out
 
 

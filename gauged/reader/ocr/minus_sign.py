@@ -9,7 +9,7 @@ level with the middle of the digits and left of the first one, in the text's upr
 minus, and the text gets its "-". The recogniser reads the line again widened left (the detector's box
 often starts at the first digit); and the number net, which reads faint minus signs PP-OCR drops,
 reads the widened lines of every unsigned number, its signs counted only when they are those of a
-scale of negatives (:func:`minus_by_number_net`). The scale stage then weighs the signs as read
+scale of negatives (:func:`scale_of_negatives`). The scale stage then weighs the signs as read
 (``sign_edits``).
 """
 
@@ -58,13 +58,17 @@ def with_seen_minus(texts: Sequence[TextBox], image: np.ndarray,
     recogniser did not read: in its pixels (:func:`shows_minus`), or, with ``read`` (the
     recogniser), in the line widened left (:func:`minus_left_of_box`), or, with ``net`` (the number
     net) and ``circle`` (the scale ring in ``image``, cx, cy, r), in the widened lines of a scale of
-    negatives (:func:`minus_by_number_net`)."""
+    negatives (:func:`number_net_reads`, :func:`scale_of_negatives`). Every box before which the net
+    read a minus gets ``net_minus``, its signs counted or not: the evidence term
+    ``net_minus_against`` (:mod:`gauged.reader.evidence`)."""
     widened = minus_left_of_box(texts, image, read) if read else set()
-    if net is not None and circle is not None:
-        widened |= minus_by_number_net(texts, image, net, circle)
+    net_reads = number_net_reads(texts, image, net, circle) if net is not None and circle is not None else {}
+    widened |= scale_of_negatives(texts, net_reads)
     out = []
     for k, box in enumerate(texts):
         text = box.text.strip()
+        if net_reads.get(k, "").startswith("-"):
+            box = replace(box, net_minus=True)
         if text[:1].isdigit() and (k in widened or shows_minus(crop_quad(image, box.quad))):
             box = replace(box, text="-" + text)
         out.append(box)
@@ -91,22 +95,31 @@ def minus_left_of_box(texts: Sequence[TextBox], image: np.ndarray,
     return found if len(found) >= MIN_WIDENED else set()
 
 
-def minus_by_number_net(texts: Sequence[TextBox], image: np.ndarray,
-                        net: Callable[[list[np.ndarray]], list[str]], circle: tuple[float, float, float]) -> set[int]:
-    """Indices of the unsigned numbers of ``texts`` other than 0 that ``net`` (the number net) reads
-    as the same digits after a minus once their line is widened left by :data:`LEFT_MARGIN` of its
-    height; none unless they are :data:`MIN_WIDENED` or more and :data:`NET_SHARE` of those numbers
-    (a scale of negatives prints its minus signs on all of its numbers but 0; a tick beside a number
-    reads as its minus on a few). Numbers whose line starts toward the scale ring ``circle``
-    (:func:`faces_ticks`) are not read: they count among the numbers, never among the signs."""
-    unsigned = [k for k, box in enumerate(texts) if UNSIGNED_NUMBER.fullmatch(box.text.strip())
-                and float(box.text.strip().replace(",", ".")) != 0]
-    readable = [k for k in unsigned if not faces_ticks(texts[k].quad, circle)]
+def number_net_reads(texts: Sequence[TextBox], image: np.ndarray, net: Callable[[list[np.ndarray]], list[str]],
+                     circle: tuple[float, float, float]) -> dict[int, str]:
+    """``net``'s reading of the line of each unsigned number of ``texts`` other than 0, widened left
+    by :data:`LEFT_MARGIN` of its height, by index; none unless :data:`MIN_WIDENED` or more are read.
+    Numbers whose line starts toward the scale ring ``circle`` (:func:`faces_ticks`) are not read."""
+    readable = [k for k in _unsigned(texts) if not faces_ticks(texts[k].quad, circle)]
     if len(readable) < MIN_WIDENED:
-        return set()
+        return {}
     reads = net([crop_quad(image, left_extended(texts[k].quad, LEFT_MARGIN)) for k in readable])
-    found = {k for k, text in zip(readable, reads, strict=True) if text == "-" + texts[k].text.strip()}
-    return found if len(found) >= max(MIN_WIDENED, NET_SHARE * len(unsigned)) else set()
+    return dict(zip(readable, reads, strict=True))
+
+
+def scale_of_negatives(texts: Sequence[TextBox], reads: dict[int, str]) -> set[int]:
+    """Indices of the numbers the number net ``reads`` as their digits after a minus; none unless they
+    are :data:`MIN_WIDENED` or more and :data:`NET_SHARE` of the unsigned numbers of ``texts`` other
+    than 0 (a scale of negatives prints its minus signs on all of its numbers but 0; a tick beside a
+    number reads as its minus on a few). The numbers the net did not read count among the numbers,
+    never among the signs."""
+    found = {k for k, text in reads.items() if text == "-" + texts[k].text.strip()}
+    return found if len(found) >= max(MIN_WIDENED, NET_SHARE * len(_unsigned(texts))) else set()
+
+
+def _unsigned(texts: Sequence[TextBox]) -> list[int]:
+    return [k for k, box in enumerate(texts) if UNSIGNED_NUMBER.fullmatch(box.text.strip())
+            and float(box.text.strip().replace(",", ".")) != 0]
 
 
 def faces_ticks(quad: np.ndarray, circle: tuple[float, float, float]) -> bool:

@@ -195,7 +195,7 @@ class ScaleTextReader(DialTextReader):
             height = float(np.median([m.box[3] - m.box[1] for m in kept]))
             markers = kept + [m for m in markers if m.box not in taken and printed_decimal(m)
                               and m.box[3] - m.box[1] <= 1.5 * height]
-        out = [ScaleMarker(m.text, m.value, _crop_box(matrix, m.box), None, None, m.score) for m in markers]
+        out = [ScaleMarker(m.text, m.value, _crop_box(matrix, m.box), None, None, m.score, m.net_minus) for m in markers]
         return out, units
 
 

@@ -160,7 +160,10 @@ def test_the_number_nets_minus_signs_on_a_few_numbers_of_a_dial_do_not_count(num
     boxes = [TextBox(t.lstrip("-"), 0.9, q) for t, q in zip(texts, quads)]
     widened = [crop_quad(image, left_extended(q, LEFT_MARGIN)) for q in quads[:3]]
     assert number_net.read(widened) == texts[:3], "the net should read the three minus signs on their own"
-    assert [b.text for b in with_seen_minus(boxes, image, net=number_net.read, circle=_ring_below(image))] == [t.lstrip("-") for t in texts]
+    out = with_seen_minus(boxes, image, net=number_net.read, circle=_ring_below(image))
+    assert [b.text for b in out] == [t.lstrip("-") for t in texts]
+    # the signs seen stay on the boxes as evidence against a reading that leaves those numbers positive
+    assert [b.net_minus for b in out] == [True, True, True, False, False, False, False]
 
 
 def test_the_number_nets_minus_signs_before_numbers_that_face_the_ticks_do_not_count(number_net):
