@@ -120,6 +120,18 @@ def test_dial_homography_rejects_centre_outside_the_ellipse() -> None:
         dial_homography(ELLIPSES[1], (320.0 + 151.0, 240.0))
 
 
+def test_dial_homography_is_remembered_read_only_for_the_same_ellipse_and_centre() -> None:
+    # A locked gauge maps through the same frame every frame: computed once, shared, never altered.
+    ellipse, centre = ELLIPSES[1], (325.0, 236.0)
+    matrix = dial_homography(ellipse, centre)
+    assert dial_homography(ellipse, np.array(centre)) is matrix and not matrix.flags.writeable
+    assert dial_homography(ELLIPSES[1], (325.0, 236.5)) is not matrix
+    with pytest.raises(ValueError, match="inside"):  # a refusal is not remembered as a frame
+        dial_homography(ellipse, (320.0 + 151.0, 240.0))
+    points = np.array([[330.0, 250.0], [300.0, 200.0], [400.0, 260.0]])
+    assert np.allclose(from_unit_circle(ellipse, to_unit_circle(ellipse, points, centre), centre), points)
+
+
 def test_as_points_rejects_bad_input() -> None:
     with pytest.raises(ValueError, match="shape"):
         as_points(np.zeros((3, 3)))
