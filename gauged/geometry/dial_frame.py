@@ -100,8 +100,11 @@ def dial_homography(ellipse: Ellipse, centre: Point | np.ndarray | None = None) 
     must lie strictly inside the ellipse (check with :func:`normalized_radius` first); otherwise
     ValueError, since no real camera puts it elsewhere.
     """
-    key = None if centre is None else tuple(float(v) for v in np.asarray(centre, dtype=float).reshape(2))
-    return _homographies(ellipse, key)[0]
+    return _homographies(ellipse, _centre_key(centre))[0]
+
+
+def _centre_key(centre: Point | np.ndarray | None) -> tuple[float, float] | None:
+    return None if centre is None else tuple(float(v) for v in np.asarray(centre, dtype=float).reshape(2))
 
 
 @lru_cache(maxsize=256)
@@ -152,8 +155,7 @@ def from_unit_circle(
     ellipse: Ellipse, rectified: np.ndarray, centre: Point | np.ndarray | None = None
 ) -> np.ndarray:
     """Inverse of :func:`to_unit_circle`: dial-frame coordinates (N, 2) -> pixels (N, 2)."""
-    key = None if centre is None else tuple(float(v) for v in np.asarray(centre, dtype=float).reshape(2))
-    return apply_homography(_homographies(ellipse, key)[1], as_points(rectified, "rectified"))
+    return apply_homography(_homographies(ellipse, _centre_key(centre))[1], as_points(rectified, "rectified"))
 
 
 def dial_angle(ellipse: Ellipse, points: np.ndarray, centre: Point | np.ndarray | None = None) -> np.ndarray:
