@@ -100,7 +100,13 @@ def dial_homography(ellipse: Ellipse, centre: Point | np.ndarray | None = None) 
     must lie strictly inside the ellipse (check with :func:`normalized_radius` first); otherwise
     ValueError, since no real camera puts it elsewhere.
     """
-    return _homographies(ellipse, _centre_key(centre))[0]
+    return dial_homographies(ellipse, centre)[0]
+
+
+def dial_homographies(ellipse: Ellipse, centre: Point | np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(:func:`dial_homography`, its inverse): image pixels -> dial frame and back, read-only arrays
+    remembered per ellipse and centre."""
+    return _homographies(ellipse, _centre_key(centre))
 
 
 def _centre_key(centre: Point | np.ndarray | None) -> tuple[float, float] | None:
@@ -155,7 +161,7 @@ def from_unit_circle(
     ellipse: Ellipse, rectified: np.ndarray, centre: Point | np.ndarray | None = None
 ) -> np.ndarray:
     """Inverse of :func:`to_unit_circle`: dial-frame coordinates (N, 2) -> pixels (N, 2)."""
-    return apply_homography(_homographies(ellipse, _centre_key(centre))[1], as_points(rectified, "rectified"))
+    return apply_homography(dial_homographies(ellipse, centre)[1], as_points(rectified, "rectified"))
 
 
 def dial_angle(ellipse: Ellipse, points: np.ndarray, centre: Point | np.ndarray | None = None) -> np.ndarray:

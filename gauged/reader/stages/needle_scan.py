@@ -44,7 +44,7 @@ import cv2
 import numpy as np
 
 from gauged.geometry.angles import wrap_to_pi
-from gauged.geometry.dial_frame import apply_homography, dial_homography
+from gauged.geometry.dial_frame import apply_homography, dial_homographies
 from gauged.geometry.needle_line import fit_needle_line
 from gauged.reader.stages.ellipse import ScaleArc
 from gauged.reader.stages.needle import NeedleReading
@@ -166,19 +166,13 @@ def anchor_offset(anchors: tuple[tuple[float, float], ...], angle: float) -> flo
 
 
 @lru_cache(maxsize=64)
-def _frame(ellipse: Ellipse, centre: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
-    to_dial = dial_homography(ellipse, centre)
-    return to_dial, np.linalg.inv(to_dial)
-
-
-@lru_cache(maxsize=64)
 def _ray_maps(ellipse: Ellipse, centre: tuple[float, float], first: float, count: int,
               radii: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
     """cv2.remap maps (len(radii), count) float32 of the rays ``first + STEP * k`` at ``radii``."""
     phis = first + STEP * np.arange(count)
     rhos = np.asarray(radii)[:, None]
     dial = np.stack([rhos * np.cos(phis), rhos * np.sin(phis)], axis=-1).reshape(-1, 2)
-    pixels = apply_homography(_frame(ellipse, centre)[1], dial).reshape(len(radii), count, 2) - 0.5  # cv2 centres
+    pixels = apply_homography(dial_homographies(ellipse, centre)[1], dial).reshape(len(radii), count, 2) - 0.5  # cv2 centres
     return pixels[..., 0].astype(np.float32), pixels[..., 1].astype(np.float32)
 
 
@@ -239,7 +233,7 @@ def _scan_line(crop: np.ndarray, arc: ScaleArc, look: NeedleLook) -> ScannedNeed
     if abs(signed) > MAX_OFFSET:
         return StageFailure(STAGE, "needle_off_centre", f"scanned needle passes {abs(signed):.2f} radii from the pivot")
     heading = math.atan2(direction[1], direction[0])
-    to_crop = _frame(arc.ellipse, tuple(map(float, arc.centre)))[1]
+    to_crop = dial_homographies(arc.ellipse, arc.centre)[1]
     start, tip = apply_homography(to_crop, np.array([line.point, line.tip]))
     along_px = (tip - start) / max(float(np.linalg.norm(tip - start)), 1e-9)
     line_px = NeedleLine(tuple(map(float, start)), tuple(map(float, along_px)), tuple(map(float, tip)),

@@ -110,14 +110,14 @@ def test_numbers_with_nothing_before_them_get_no_minus_from_the_widened_lines(en
 
 @pytest.fixture(scope="module")
 def number_net():
-    from gauged.reader.factory import NUMBER_NET_MODEL, helper_model_path
+    from gauged.reader.factory import NUMBER_NET_MODEL
     from gauged.reader.ocr.number_net import NumberNet
-    from gauged.reader.onnx_model import ModelNotAvailable
+    from gauged.reader.onnx_model import packaged_model_path
 
-    try:
-        return NumberNet(helper_model_path(NUMBER_NET_MODEL), threads=1)
-    except ModelNotAvailable as exc:
-        pytest.skip(f"number net not installed: {exc}")
+    path = packaged_model_path(NUMBER_NET_MODEL)
+    if not path.is_file():
+        pytest.skip(f"gauged/models/{NUMBER_NET_MODEL} is missing: see docs/ocr.md")
+    return NumberNet(path, threads=1)
 
 
 def _faint_minus_line(texts: list[str], scale: float = 1.2) -> tuple[np.ndarray, list[np.ndarray]]:
