@@ -154,7 +154,7 @@ class ScaleMarker:
     angle: float | None = None
     inlier: bool | None = None
     score: float = 1.0
-    net_minus: bool = False  # the number net read a minus before its digits (counted or not: minus_sign)
+    net_minus: bool = False  # the nets' evidence leans to a minus before its digits (counted or not: minus_sign)
 
 
 @dataclass(frozen=True, slots=True)

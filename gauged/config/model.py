@@ -101,7 +101,7 @@ class ReaderConfig(BaseModel):
     threads: int = Field(2, ge=1, le=64, description="onnxruntime intra-op threads per model.")
     min_confidence: float = Field(0.5, ge=0, le=1, description="Readings below this confidence are refused.")
     models_dir: Path | None = Field(None, description="Folder whose crop.onnx/detector.onnx replace the shipped "
-                                    "models (a candidate model under evaluation), and whose numbers.onnx/"
+                                    "models (a candidate model under evaluation), and whose numbers.onnx/minus.onnx/"
                                     "ocr_det_int8.onnx/notch_check.onnx do where it holds them; unset: the shipped ones.")
     ocr_int8_detector: bool = Field(True, description="Run the OCR text detector as the shipped int8 copy of the "
                                     "OCR wheel's float model (2.7x faster, the same readings on the dev sets); "
@@ -109,6 +109,9 @@ class ReaderConfig(BaseModel):
     ocr_number_net: bool = Field(True, description="When a dial's numbers give no scale, read them again with the "
                                  "shipped number net (numbers.onnx) too and keep a scale it gives (docs/ocr.md); "
                                  "false: PP-OCR's recogniser alone.")
+    ocr_minus_net: bool = Field(True, description="Tell a faint minus the text box left out from a tick beside a "
+                                "number with the shipped minus net (minus.onnx) and the number net's evidence "
+                                "together (docs/ocr.md); false: the number net's strings alone.")
     notch_check: bool = Field(True, description="A dial refused because its notch peaks fit no scale ring (after "
                               "every other look) is read once more on the major peaks the shipped notch check "
                               "(notch_check.onnx) keeps, without the minor ticks it drops; false: never.")

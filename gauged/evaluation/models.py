@@ -32,6 +32,7 @@ from gauged.evaluation.timing import median_s
 from gauged.reader.factory import (
     CROP_MODEL,
     DETECTOR_MODEL,
+    MINUS_NET_MODEL,
     NOTCH_CHECK_MODEL,
     NUMBER_NET_MODEL,
     OCR_DET_INT8_MODEL,
@@ -216,7 +217,7 @@ def evaluate_models(data: Path, synth: Path | None, threads: int, models_dir: Pa
     except ModelNotAvailable:
         notch_check = None  # the notch figures are then the crop model's peaks alone
     files = [m.path for m in (crop, detector_model, notch_check) if m is not None]
-    files += [p for p in (helper_model_path(n, models_dir) for n in (OCR_DET_INT8_MODEL, NUMBER_NET_MODEL)) if p.is_file()]
+    files += [p for p in (helper_model_path(n, models_dir) for n in (OCR_DET_INT8_MODEL, NUMBER_NET_MODEL, MINUS_NET_MODEL)) if p.is_file()]
     result: dict = {"files_mb": round(sum(p.stat().st_size for p in files) / 2**20, 2),
                     "files": [p.name for p in files]}
     crop_input = np.zeros((crop.input_size, crop.input_size, 3), np.float32)

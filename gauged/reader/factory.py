@@ -18,6 +18,7 @@ CROP_MODEL = "crop.onnx"
 DETECTOR_MODEL = "detector.onnx"
 OCR_DET_INT8_MODEL = "ocr_det_int8.onnx"  # int8 copy of the OCR wheel's text detector (gauged.training.quantize_ocr)
 NUMBER_NET_MODEL = "numbers.onnx"  # the scale-number recogniser (gauged.training.number_lines)
+MINUS_NET_MODEL = "minus.onnx"  # the minus-sign classifier of the minus look (gauged.training.minus_lines)
 NOTCH_CHECK_MODEL = "notch_check.onnx"  # the second look at the major-notch peaks (gauged.training.notch_check)
 
 
@@ -33,6 +34,15 @@ def helper_model_path(name: str, models_dir: Path | None = None) -> Path:
     if models_dir is not None and (candidate := Path(models_dir) / name).is_file():
         return candidate
     return packaged_model_path(name)
+
+
+def _optional(name: str, config: ReaderConfig) -> Path | None:
+    """A helper model's file, or None (with a warning that says what is lost) when it is missing."""
+    path = helper_model_path(name, config.models_dir)
+    if path.is_file():
+        return path
+    log.warning("model file %s is missing; the reader runs without it (see gauged/models/README.md)", path)
+    return None
 
 
 def build_reader(config: ReaderConfig) -> GaugeReader:
@@ -58,7 +68,8 @@ def build_reader(config: ReaderConfig) -> GaugeReader:
     try:
         ocr = ScaleTextReader(threads=config.threads,
                               int8_detector=helper_model_path(OCR_DET_INT8_MODEL, config.models_dir) if config.ocr_int8_detector else None,
-                              number_net=helper_model_path(NUMBER_NET_MODEL, config.models_dir) if config.ocr_number_net else None)
+                              number_net=helper_model_path(NUMBER_NET_MODEL, config.models_dir) if config.ocr_number_net else None,
+                              minus_net=_optional(MINUS_NET_MODEL, config) if config.ocr_minus_net else None)
     except OcrUnavailable as exc:  # OCR is optional when every gauge has a configured scale
         log.warning("OCR is not available (%s): gauges without a configured scale cannot be read", exc)
         ocr = None

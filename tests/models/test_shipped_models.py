@@ -77,13 +77,14 @@ def test_crop_model_finds_notches_ends_and_needle_of_clean_crops():
 
 def test_eval_models_counts_every_shipped_onnx_file_within_15_mb(tmp_path):
     from gauged.evaluation.models import evaluate_models, format_models
-    from gauged.reader.factory import NOTCH_CHECK_MODEL, NUMBER_NET_MODEL, OCR_DET_INT8_MODEL
+    from gauged.reader.factory import MINUS_NET_MODEL, NOTCH_CHECK_MODEL, NUMBER_NET_MODEL, OCR_DET_INT8_MODEL
 
-    for name in (CROP_MODEL, DETECTOR_MODEL, NOTCH_CHECK_MODEL, OCR_DET_INT8_MODEL, NUMBER_NET_MODEL):
+    for name in (CROP_MODEL, DETECTOR_MODEL, NOTCH_CHECK_MODEL, OCR_DET_INT8_MODEL, NUMBER_NET_MODEL, MINUS_NET_MODEL):
         if not packaged_model_path(name).is_file():
             pytest.skip(f"gauged/models/{name} is not shipped")
     result = evaluate_models(tmp_path, None, threads=1)  # no datasets: sizes and speeds only
-    assert result["files"] == [CROP_MODEL, DETECTOR_MODEL, NOTCH_CHECK_MODEL, OCR_DET_INT8_MODEL, NUMBER_NET_MODEL]
+    assert result["files"] == [CROP_MODEL, DETECTOR_MODEL, NOTCH_CHECK_MODEL, OCR_DET_INT8_MODEL, NUMBER_NET_MODEL,
+                               MINUS_NET_MODEL]
     assert sorted(result["files"]) == sorted(p.name for p in packaged_model_path(CROP_MODEL).parent.glob("*.onnx"))
     expected = sum(packaged_model_path(n).stat().st_size for n in result["files"]) / 2**20
     assert result["files_mb"] == round(expected, 2) and result["files_mb"] <= 15.0  # issue 4's limit

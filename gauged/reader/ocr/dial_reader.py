@@ -28,6 +28,7 @@ from gauged.reader.ocr.dial_text import (
     _up,
 )
 from gauged.reader.ocr.engine import DEFAULT_MODEL_PACKAGE, OcrEngine
+from gauged.reader.ocr.minus_net import MinusNet
 from gauged.reader.ocr.number_net import NumberNet
 from gauged.reader.ocr.numbers import parse_number
 from gauged.reader.ocr.regions import RING, polar_strip
@@ -63,15 +64,18 @@ class DialTextReader:
     which a reading is tried in other orientations and, if still under, dropped. ``det_side`` is the
     detector's input side in pixels for the ring around the circle. ``int8_detector`` is the int8
     copy of the text detector to run instead of the float one (:class:`OcrEngine`); ``number_net`` the
-    number net's ONNX file (:mod:`gauged.reader.ocr.number_net`) that reads digit lines again.
+    number net's ONNX file (:mod:`gauged.reader.ocr.number_net`) that reads digit lines again, and
+    ``minus_net`` the minus net's (:mod:`gauged.reader.ocr.minus_net`) that tells the minus signs the
+    text boxes left out.
     """
 
     def __init__(self, threads: int = 2, models: str = DEFAULT_MODEL_PACKAGE, min_score: float = 0.5,
                  det_side: int = 384, use_hints: bool = True, progression: bool = True,
                  polar_fallback: bool = True, quick: bool = True, int8_detector: Path | None = None,
-                 number_net: Path | None = None) -> None:
+                 number_net: Path | None = None, minus_net: Path | None = None) -> None:
         self.engine = OcrEngine(threads=threads, package=models, int8_detector=int8_detector,
                                 number_net=NumberNet(number_net, threads) if number_net is not None else None)
+        self.minus_net = MinusNet(minus_net, threads) if minus_net is not None else None
         self.min_score = min_score
         self.det_side = det_side
         self.use_hints = use_hints

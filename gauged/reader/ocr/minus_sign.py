@@ -1,15 +1,16 @@
 """Minus signs the recogniser dropped, found in the text's own pixels.
 
-PP-OCR's recogniser often reads "-40" as "40" (and the number net never reads a sign): the dash is
+PP-OCR's recogniser often reads "-40" as "40": the dash is
 in the detected box, but decoded as nothing. The sign is what tells a clockwise -100..0 scale from a
 counter-clockwise 0..100 one (the numbers alone are mirror images, :func:`gauged.reader.stages.scale_direction.
 fit_ring`), so reading it wrong sends out a value of the wrong sign, off by up to twice the span.
 :func:`with_seen_minus` looks at each number read without a sign: a short horizontal bar of ink,
 level with the middle of the digits and left of the first one, in the text's upright line image, is a
 minus, and the text gets its "-". The recogniser reads the line again widened left (the detector's box
-often starts at the first digit); and the number net, which reads faint minus signs PP-OCR drops,
-reads the widened lines of every unsigned number, its signs counted only when they are those of a
-scale of negatives (:func:`scale_of_negatives`). The scale stage then weighs the signs as read
+often starts at the first digit); and the number net and the minus net, which see faint minus signs
+PP-OCR drops, weigh the widened lines of every unsigned number, their signs counted only when the
+dial's evidence is that of a scale of negatives (:func:`summed_minus_signs`; without the minus net,
+the number net's strings by :func:`scale_of_negatives`). The scale stage then weighs the signs as read
 (``sign_edits``).
 """
 
@@ -25,6 +26,9 @@ import cv2
 import numpy as np
 
 from gauged.reader.ocr.text import Recognition, TextBox, crop_quad
+
+NetOdds = Callable[[list[np.ndarray], list[str]], np.ndarray]  # lines, their digits -> log-odds of a minus first
+MinusOdds = Callable[[list[np.ndarray]], np.ndarray]  # lines -> log-odds of a minus first
 
 BAND = (0.25, 0.75)  # of the digits' extent, top to bottom: where a minus's ink lies
 CLEAR = (0.2, 0.8)  # ... and outside this band the columns of a minus hold no ink
@@ -47,27 +51,46 @@ TICKS_BEFORE = 0.7  # cosine between a number's "before" (left of its text) and 
 # no evidence: the number is not read, and counts as one without a minus ("0.05, 0.10" inside the ring at
 # 9 o'clock of a 0..0.25 dial were read "-0.05, -0.10" on the ring's ticks, and with "0.25" beside them
 # made a scale of negatives; "0.2, 0.4" of a 0..1 dial were read "-0.2, -0.4" beside a "1.0" on the ticks)
+ODDS_CLIP = 3.0  # each net's log-odds of a minus before a number, clipped to +-this: no one line, however
+# sure a net is of it, signs a dial on its own
+SIGN_ODDS = 2.0  # the sum over a dial's lines of their evidence above which its leaning lines are signed.
+# On 400 + 400 dev renders (seed 7,000,000, cw and ccw), of the dials with two or more lines read, 7 of
+# 15 scales of negatives are signed and none of 532 positive ones, at any sum from 0 to 3 (the number
+# net's strings with NET_SHARE: 4 of the 15, and 2 positive dials). The sum of the two nets' odds in
+# place of the lesser signed 10 of the 15 there, but also held-out positive dials of two or three lines
+# where one net alone was sure of a minus ("0.2, 0.4" of a 0..1 dial: the number net 5.6 and 4.5, the
+# minus net 1.1 and -0.8)
 UNSIGNED_NUMBER = re.compile(r"\d+(?:[.,]\d+)?")
 
 
 def with_seen_minus(texts: Sequence[TextBox], image: np.ndarray,
                     read: Callable[[list[np.ndarray]], list[Recognition]] | None = None,
                     net: Callable[[list[np.ndarray]], list[str]] | None = None,
-                    circle: tuple[float, float, float] | None = None) -> list[TextBox]:
+                    circle: tuple[float, float, float] | None = None,
+                    net_odds: NetOdds | None = None, minus_odds: MinusOdds | None = None) -> list[TextBox]:
     """``texts`` with a "-" put before each number whose line in ``image`` shows a minus the
     recogniser did not read: in its pixels (:func:`shows_minus`), or, with ``read`` (the
     recogniser), in the line widened left (:func:`minus_left_of_box`), or, with ``net`` (the number
     net) and ``circle`` (the scale ring in ``image``, cx, cy, r), in the widened lines of a scale of
     negatives (:func:`number_net_reads`, :func:`scale_of_negatives`). Every box before which the net
-    read a minus gets ``net_minus``, its signs counted or not: the evidence term
-    ``net_minus_against`` (:mod:`gauged.reader.evidence`)."""
+    read a minus (with the minus net: whose evidence leans to one) gets ``net_minus``, its signs counted or not: the evidence term
+    ``net_minus_against`` (:mod:`gauged.reader.evidence`). With ``net_odds`` (the number net's
+    log-odds of a minus) and ``minus_odds`` (the minus net, :mod:`gauged.reader.ocr.minus_net`), the
+    two nets' evidence summed over the dial tells those signs instead (:func:`summed_minus_signs`)."""
     widened = minus_left_of_box(texts, image, read) if read else set()
-    net_reads = number_net_reads(texts, image, net, circle) if net is not None and circle is not None else {}
-    widened |= scale_of_negatives(texts, net_reads)
+    if circle is not None and net_odds is not None and minus_odds is not None:
+        signed, leaning = summed_minus_signs(texts, image, net_odds, minus_odds, circle)
+    elif circle is not None and net is not None:
+        net_reads = number_net_reads(texts, image, net, circle)
+        signed = scale_of_negatives(texts, net_reads)
+        leaning = {k for k, read_as in net_reads.items() if read_as.startswith("-")}
+    else:
+        signed, leaning = set(), set()
+    widened |= signed
     out = []
     for k, box in enumerate(texts):
         text = box.text.strip()
-        if net_reads.get(k, "").startswith("-"):
+        if k in leaning:
             box = replace(box, net_minus=True)
         if text[:1].isdigit() and (k in widened or shows_minus(crop_quad(image, box.quad))):
             box = replace(box, text="-" + text)
@@ -105,6 +128,30 @@ def number_net_reads(texts: Sequence[TextBox], image: np.ndarray, net: Callable[
         return {}
     reads = net([crop_quad(image, left_extended(texts[k].quad, LEFT_MARGIN)) for k in readable])
     return dict(zip(readable, reads, strict=True))
+
+
+def summed_minus_signs(texts: Sequence[TextBox], image: np.ndarray, net_odds: NetOdds, minus_odds: MinusOdds,
+                       circle: tuple[float, float, float]) -> tuple[set[int], set[int]]:
+    """(the numbers signed, the numbers whose evidence leans to a minus) of the unsigned numbers of
+    ``texts`` other than 0 whose lines do not face the ticks, read widened left by :data:`LEFT_MARGIN`.
+
+    Each line's evidence is the lesser of two log-odds of a minus before its digits, each clipped to
+    :data:`ODDS_CLIP`: the number net's (``net_odds``, its CTC columns, trained on whole numbers) and
+    the minus net's (``minus_odds``, trained on these lines alone). Each net alone reads a tick or a
+    blur beside a number as its minus now and then, rarely both at once. A scale of negatives prints
+    its minus on all of its numbers but 0, so the dial's evidence is the sum over its lines: the lines
+    whose own evidence leans to a minus are signed when that sum passes :data:`SIGN_ODDS` and at least
+    :data:`MIN_WIDENED` lines lean so. A tick or blur beside one number does not sign a dial."""
+    readable = [k for k in _unsigned(texts) if not faces_ticks(texts[k].quad, circle)]
+    if len(readable) < MIN_WIDENED:
+        return set(), set()
+    lines = [crop_quad(image, left_extended(texts[k].quad, LEFT_MARGIN)) for k in readable]
+    digits = [texts[k].text.strip() for k in readable]
+    each = np.minimum(np.clip(np.asarray(minus_odds(lines), np.float64), -ODDS_CLIP, ODDS_CLIP),
+                      np.clip(np.asarray(net_odds(lines, digits), np.float64), -ODDS_CLIP, ODDS_CLIP))
+    leaning = {k for k, e in zip(readable, each, strict=True) if e > 0}
+    sure = float(each.sum()) > SIGN_ODDS and len(leaning) >= MIN_WIDENED
+    return (leaning if sure else set()), leaning
 
 
 def scale_of_negatives(texts: Sequence[TextBox], reads: dict[int, str]) -> set[int]:

@@ -18,10 +18,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from gauged.reader.ocr.text import ctc_log_likelihood
 from gauged.reader.onnx_model import load_session
 
 CHARS = "0123456789.,-"
 LINE_HEIGHT, LINE_WIDTH = 32, 128
+ODDS_FLOOR = 99.0  # the log-odds given when a string cannot be read from the columns at all
 
 
 def to_line_input(line_bgr: np.ndarray) -> np.ndarray:
@@ -52,7 +54,23 @@ class NumberNet:
         self.session, _ = load_session(path, threads, how_to_make="docs/ocr.md")
 
     def read(self, lines: Sequence[np.ndarray]) -> list[str]:
+        return greedy_decode(self._logits(lines)) if lines else []
+
+    def minus_log_odds(self, lines: Sequence[np.ndarray], digits: Sequence[str]) -> np.ndarray:
+        """For each line, log P("-" + its digits) - log P(its digits) under the net's CTC columns: how
+        much more the line reads as those digits after a minus than as the digits alone."""
         if not lines:
-            return []
+            return np.zeros(0)
+        out = []
+        for logits, text in zip(self._logits(lines), digits, strict=True):
+            z = logits.astype(np.float64)
+            top = z.max(axis=-1, keepdims=True)
+            logp = z - top - np.log(np.exp(z - top).sum(axis=-1, keepdims=True))
+            labels = [CHARS.index(c) + 1 for c in text if c in CHARS]
+            odds = ctc_log_likelihood(logp, [CHARS.index("-") + 1, *labels]) - ctc_log_likelihood(logp, labels)
+            out.append(odds if np.isfinite(odds) else -ODDS_FLOOR)
+        return np.asarray(out)
+
+    def _logits(self, lines: Sequence[np.ndarray]) -> np.ndarray:
         x = np.stack([to_line_input(line) for line in lines])[:, None].astype(np.float32) * np.float32(1 / 255)
-        return greedy_decode(self.session.run(None, {"line": x})[0])
+        return self.session.run(None, {"line": x})[0]

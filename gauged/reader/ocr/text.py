@@ -50,7 +50,7 @@ class TextBox:
     quad: np.ndarray
     digits: str = ""
     digits_score: float = 0.0
-    net_minus: bool = False  # the number net read a minus before it in its line widened left (minus_sign)
+    net_minus: bool = False  # the nets' evidence leans to a minus before it in its line widened left (minus_sign)
 
     @property
     def center(self) -> tuple[float, float]:

@@ -169,11 +169,14 @@ class ScaleTextReader(DialTextReader):
             other = self._read_view(crop, arc, hints, detail, downs[1])
             if other.agreeing() > view.agreeing():
                 view = other
-        # The widened lines go to PP-OCR, whose signs count from two numbers on, and to the number net,
-        # whose signs count only on three quarters of the dial's numbers: it reads a tick beside a number
-        # as its minus (a clockwise 0..400 dial at 173 was read -173 by the net of the retry).
+        # The widened lines go to PP-OCR, whose signs count from two numbers on, and to the number net and
+        # the minus net, whose evidence counts only summed over the dial's lines: each reads a tick beside
+        # a number as its minus now and then (a clockwise 0..400 dial at 173 was read -173 by the number
+        # net of the retry).
         net = self.engine.number_net.read if self.engine.number_net is not None else None
-        texts = with_seen_minus(view.texts, view.image, self.engine.run_recogniser, net, view.circle)
+        net_odds = self.engine.number_net.minus_log_odds if self.engine.number_net is not None else None
+        minus_odds = self.minus_net.log_odds if self.minus_net is not None else None
+        texts = with_seen_minus(view.texts, view.image, self.engine.run_recogniser, net, view.circle, net_odds, minus_odds)
         circle, matrix = view.circle, view.matrix
         if not texts:
             return StageFailure(STAGE, NO_TEXT, "no text found on the rectified dial")
