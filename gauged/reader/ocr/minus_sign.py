@@ -54,10 +54,11 @@ TICKS_BEFORE = 0.7  # cosine between a number's "before" (left of its text) and 
 ODDS_CLIP = 3.0  # each net's log-odds of a minus before a number, clipped to +-this: no one line, however
 # sure a net is of it, signs a dial on its own
 SIGN_ODDS = 2.0  # the sum over a dial's lines of their evidence above which its leaning lines are signed.
-# On 400 + 400 dev renders (seed 7,000,000, cw and ccw), of the dials with two or more lines read, 7 of
-# 15 scales of negatives are signed and none of 532 positive ones, at any sum from 0 to 3 (the number
-# net's strings with NET_SHARE: 4 of the 15, and 2 positive dials). The sum of the two nets' odds in
-# place of the lesser signed 10 of the 15 there, but also held-out positive dials of two or three lines
+# On 400 + 400 dev renders (seed 7,000,000, cw and ccw), of the dials with two or more lines weighed, 7
+# of 15 scales of negatives are signed and none of 511 positive ones, at any sum from 0 to 3 (the number
+# net's strings with NET_SHARE: 4 of the 15, and 2 positive dials; bench/investigations/minus_evidence.py).
+# The sum of the two nets' odds in place of the lesser signed 9 of the 15 there and one positive dial, and
+# held-out positive dials of two or three lines
 # where one net alone was sure of a minus ("0.2, 0.4" of a 0..1 dial: the number net 5.6 and 4.5, the
 # minus net 1.1 and -0.8)
 UNSIGNED_NUMBER = re.compile(r"\d+(?:[.,]\d+)?")
