@@ -14,17 +14,19 @@ each net alone, at a few thresholds.
 
 from __future__ import annotations
 
-import argparse
 import json
+import sys
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 import gauged.reader.ocr.minus_sign as minus_sign
 from gauged.config.model import ReaderConfig
 from gauged.reader.factory import build_reader
 from gauged.reader.ocr.text import crop_quad
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from net_minus_odds import main, read_renders  # noqa: E402  (the same reading of renders and command line)
 
 
 def collect(folder: Path, count: int) -> list[dict]:
@@ -45,13 +47,7 @@ def collect(folder: Path, count: int) -> list[dict]:
 
     minus_sign.summed_minus_signs = recorded
     try:
-        labels = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][:count]
-        for n, label in enumerate(labels, 1):
-            scale = next(s for s in label["gauges"][0]["scales"] if s["role"] == "primary")
-            current.update(image=label["image"], texts={x["text"].replace("\u2212", "-") for x in scale["numbers"]})
-            reader.read_image(cv2.imread(str(folder / label["image"])))
-            if n % 50 == 0:
-                print(f"{folder.name}: {n}/{len(labels)} renders", flush=True)
+        read_renders(reader, folder, count, current)
     finally:
         minus_sign.summed_minus_signs = look
     return dials
@@ -77,17 +73,5 @@ def report(dials: list[dict]) -> None:
                   f"{signed[False]} of {len(kinds) - negatives} positive")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", type=Path, action="append", required=True, help="a `gauged synth images` folder (repeatable)")
-    parser.add_argument("--count", type=int, default=400, help="renders read from each folder")
-    parser.add_argument("--out", type=Path, help="write the per-dial rows here as JSON")
-    args = parser.parse_args()
-    dials = [d for folder in args.data for d in collect(folder, args.count)]
-    if args.out:
-        args.out.write_text(json.dumps(dials))
-    report(dials)
-
-
 if __name__ == "__main__":
-    main()
+    main(__doc__, collect, report, "per-dial rows")

@@ -35,7 +35,7 @@ def _log_softmax(logits: np.ndarray) -> np.ndarray:
 
 
 def collect(folder: Path, count: int) -> list[dict]:
-    reader = build_reader(ReaderConfig())
+    reader = build_reader(ReaderConfig(ocr_minus_net=False))  # the number net alone looks for the minus (the rule before the minus net)
     session = reader.ocr.engine.number_net.session
     rows: list[dict] = []
     current: dict = {}
@@ -61,16 +61,22 @@ def collect(folder: Path, count: int) -> list[dict]:
 
     minus_sign.number_net_reads = scored
     try:
-        labels = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][:count]
-        for n, label in enumerate(labels, 1):
-            scale = next(s for s in label["gauges"][0]["scales"] if s["role"] == "primary")
-            current.update(image=label["image"], texts={x["text"].replace("\u2212", "-") for x in scale["numbers"]})
-            reader.read_image(cv2.imread(str(folder / label["image"])))
-            if n % 50 == 0:
-                print(f"{folder.name}: {n}/{len(labels)} renders, {len(rows)} numbers", flush=True)
+        read_renders(reader, folder, count, current)
     finally:
         minus_sign.number_net_reads = look
     return rows
+
+
+def read_renders(reader, folder: Path, count: int, current: dict) -> None:
+    """Read the first ``count`` renders of ``folder`` with ``reader``, with ``current`` holding each one's
+    image name and its primary scale's texts while it is read."""
+    labels = [json.loads(line) for line in (folder / "labels.jsonl").read_text().splitlines()][:count]
+    for n, label in enumerate(labels, 1):
+        scale = next(s for s in label["gauges"][0]["scales"] if s["role"] == "primary")
+        current.update(image=label["image"], texts={x["text"].replace("\u2212", "-") for x in scale["numbers"]})
+        reader.read_image(cv2.imread(str(folder / label["image"])))
+        if n % 50 == 0:
+            print(f"{folder.name}: {n}/{len(labels)} renders", flush=True)
 
 
 def report(rows: list[dict]) -> None:
@@ -102,16 +108,17 @@ def report(rows: list[dict]) -> None:
               f"{sum(signs(dials[k]) for k in positive)} of {len(positive)} positive dials")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def main(doc: str = __doc__, collect=collect, report=report, rows: str = "per-number rows") -> None:
+    """The command line of this script, and of others that collect rows from renders and report them."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, action="append", required=True, help="a `gauged synth images` folder (repeatable)")
     parser.add_argument("--count", type=int, default=400, help="renders read from each folder")
-    parser.add_argument("--out", type=Path, help="write the per-number rows here as JSON")
+    parser.add_argument("--out", type=Path, help=f"write the {rows} here as JSON")
     args = parser.parse_args()
-    rows = [row for folder in args.data for row in collect(folder, args.count)]
+    found = [row for folder in args.data for row in collect(folder, args.count)]
     if args.out:
-        args.out.write_text(json.dumps(rows))
-    report(rows)
+        args.out.write_text(json.dumps(found))
+    report(found)
 
 
 if __name__ == "__main__":
