@@ -1,6 +1,6 @@
 """How well does the number net tell a minus the text box left out from a tick or a blur beside a number?
 
-Reads each render of a synthetic set with the shipped reader and, wherever the minus look
+Reads each render of a synthetic set with the shipped reader (its minus net off) and, wherever the minus look
 (:func:`gauged.reader.ocr.minus_sign.number_net_reads`) runs, scores every unsigned number other than
 0 in its line widened left: the net's greedy string, and its CTC log-odds log P("-" + digits) -
 log P(digits). The truth is the label's primary scale: the number is printed with a minus when only
