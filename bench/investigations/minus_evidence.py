@@ -36,7 +36,7 @@ def collect(folder: Path, count: int) -> list[dict]:
     look = minus_sign.summed_minus_signs
 
     def recorded(texts, image, net_odds, minus_odds, circle):
-        readable = [k for k in minus_sign._unsigned(texts) if not minus_sign.faces_ticks(texts[k].quad, circle)]
+        readable = minus_sign.readable_numbers(texts, circle)
         lines = [crop_quad(image, minus_sign.left_extended(texts[k].quad, minus_sign.LEFT_MARGIN)) for k in readable]
         digits = [texts[k].text.strip() for k in readable]
         numbers = [{"text": d, "plain": d in current["texts"], "signed": "-" + d in current["texts"],

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from collections import defaultdict
 from pathlib import Path
 
@@ -25,37 +24,25 @@ import numpy as np
 import gauged.reader.ocr.minus_sign as minus_sign
 from gauged.config.model import ReaderConfig
 from gauged.reader.factory import build_reader
-from gauged.reader.ocr.number_net import CHARS, greedy_decode, to_line_input
-from gauged.reader.ocr.text import crop_quad, ctc_log_likelihood
-
-
-def _log_softmax(logits: np.ndarray) -> np.ndarray:
-    top = logits.max(axis=-1, keepdims=True)
-    return logits - top - np.log(np.exp(logits - top).sum(axis=-1, keepdims=True))
+from gauged.reader.ocr.text import crop_quad
 
 
 def collect(folder: Path, count: int) -> list[dict]:
     reader = build_reader(ReaderConfig(ocr_minus_net=False))  # the number net alone looks for the minus (the rule before the minus net)
-    session = reader.ocr.engine.number_net.session
+    number_net = reader.ocr.engine.number_net
     rows: list[dict] = []
     current: dict = {}
     look = minus_sign.number_net_reads
 
     def scored(texts, image, net, circle):
-        for box in texts:
-            text = box.text.strip()
-            if not minus_sign.UNSIGNED_NUMBER.fullmatch(text) or float(text.replace(",", ".")) == 0:
-                continue
+        for k in minus_sign.unsigned_numbers(texts):
+            box, text = texts[k], texts[k].text.strip()
             plain, signed = text in current["texts"], "-" + text in current["texts"]
             if plain == signed:
                 continue
-            line = crop_quad(image, minus_sign.left_extended(box.quad, minus_sign.LEFT_MARGIN))
-            logits = session.run(None, {"line": to_line_input(line)[None, None].astype(np.float32) / 255})[0]
-            logp = _log_softmax(logits[0].astype(np.float64))
-            labels = [CHARS.index(c) + 1 for c in text]
-            odds = ctc_log_likelihood(logp, [CHARS.index("-") + 1, *labels]) - ctc_log_likelihood(logp, labels)
+            line = [crop_quad(image, minus_sign.left_extended(box.quad, minus_sign.LEFT_MARGIN))]
             rows.append({"set": folder.name, "image": current["image"], "text": text, "minus": signed,
-                         "odds": odds if math.isfinite(odds) else -99.0, "read": greedy_decode(logits)[0],
+                         "odds": float(number_net.minus_log_odds(line, [text])[0]), "read": number_net.read(line)[0],
                          "faces": bool(minus_sign.faces_ticks(box.quad, circle))})
         return look(texts, image, net, circle)
 

@@ -109,7 +109,7 @@ def train(data: list[Path], val: Path, out: Path, epochs: int = 12, threads: int
             loss.backward()
             opt.step()
             sched.step()
-            total += float(loss) * len(idx)
+            total += loss.item() * len(idx)
         point = operating_point(scores(net, vx), vminus, vfaces)
         log.info("epoch %d: loss %.4f, val %s", epoch + 1, total / len(order), point)
         if point["recall"] > best["recall"]:

@@ -124,7 +124,7 @@ def number_net_reads(texts: Sequence[TextBox], image: np.ndarray, net: Callable[
     """``net``'s reading of the line of each unsigned number of ``texts`` other than 0, widened left
     by :data:`LEFT_MARGIN` of its height, by index; none unless :data:`MIN_WIDENED` or more are read.
     Numbers whose line starts toward the scale ring ``circle`` (:func:`faces_ticks`) are not read."""
-    readable = [k for k in _unsigned(texts) if not faces_ticks(texts[k].quad, circle)]
+    readable = readable_numbers(texts, circle)
     if len(readable) < MIN_WIDENED:
         return {}
     reads = net([crop_quad(image, left_extended(texts[k].quad, LEFT_MARGIN)) for k in readable])
@@ -143,7 +143,7 @@ def summed_minus_signs(texts: Sequence[TextBox], image: np.ndarray, net_odds: Ne
     its minus on all of its numbers but 0, so the dial's evidence is the sum over its lines: the lines
     whose own evidence leans to a minus are signed when that sum passes :data:`SIGN_ODDS` and at least
     :data:`MIN_WIDENED` lines lean so. A tick or blur beside one number does not sign a dial."""
-    readable = [k for k in _unsigned(texts) if not faces_ticks(texts[k].quad, circle)]
+    readable = readable_numbers(texts, circle)
     if len(readable) < MIN_WIDENED:
         return set(), set()
     lines = [crop_quad(image, left_extended(texts[k].quad, LEFT_MARGIN)) for k in readable]
@@ -162,12 +162,19 @@ def scale_of_negatives(texts: Sequence[TextBox], reads: dict[int, str]) -> set[i
     number reads as its minus on a few). The numbers the net did not read count among the numbers,
     never among the signs."""
     found = {k for k, text in reads.items() if text == "-" + texts[k].text.strip()}
-    return found if len(found) >= max(MIN_WIDENED, NET_SHARE * len(_unsigned(texts))) else set()
+    return found if len(found) >= max(MIN_WIDENED, NET_SHARE * len(unsigned_numbers(texts))) else set()
 
 
-def _unsigned(texts: Sequence[TextBox]) -> list[int]:
+def unsigned_numbers(texts: Sequence[TextBox]) -> list[int]:
+    """Indices of the numbers of ``texts`` read without a sign, other than 0: those a minus may be missing from."""
     return [k for k, box in enumerate(texts) if UNSIGNED_NUMBER.fullmatch(box.text.strip())
             and float(box.text.strip().replace(",", ".")) != 0]
+
+
+def readable_numbers(texts: Sequence[TextBox], circle: tuple[float, float, float]) -> list[int]:
+    """:func:`unsigned_numbers` whose lines do not face the ticks of the scale ring ``circle``
+    (:func:`faces_ticks`): the ones the nets weigh."""
+    return [k for k in unsigned_numbers(texts) if not faces_ticks(texts[k].quad, circle)]
 
 
 def faces_ticks(quad: np.ndarray, circle: tuple[float, float, float]) -> bool:
